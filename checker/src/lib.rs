@@ -1,0 +1,16 @@
+//! `lagra-checker`: Lagra's trusted core.
+//!
+//! It holds the one definition of every interaction term (generic over [`real::Real`]), their
+//! dimensions, the claims a scene may declare, and the decision that turns rigorous interval
+//! enclosures into PASS or FAIL. It depends on no other crate of the project: the code that did
+//! the arithmetic is not the code that signs off on it.
+
+pub mod claims;
+pub mod decision;
+pub mod model;
+pub mod monitor;
+pub mod quantities;
+pub mod real;
+pub mod render;
+pub mod terms;
+pub mod units;

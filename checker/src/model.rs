@@ -1,0 +1,121 @@
+//! The canonical Lagrangian graph as the checker sees it: bodies and term instances with their
+//! parameters as exact binary64 values. The kernel's fast graph is built from this, and the
+//! certificate carries it, so a re-check needs nothing else.
+
+use crate::terms::{Kind, Shape};
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnitSystem {
+    /// Numbers are in the scene's own reduced units; no physical unit may be written.
+    Reduced,
+    /// Numbers are in SI base units (kg, m, s, C) after conversion of any written unit.
+    Si,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Body {
+    pub mass: f64,
+    pub charge: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TermInstance {
+    pub kind: Kind,
+    /// Body indices for a bond; empty for pairwise and external terms (they act on all bodies).
+    pub sites: Vec<usize>,
+    /// Parameters flattened in the order of the kind's `Spec::params`.
+    pub params: Vec<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    pub units: UnitSystem,
+    pub bodies: Vec<Body>,
+    pub terms: Vec<TermInstance>,
+}
+
+/// A state of the system as the kernel produced it, exactly.
+#[derive(Clone, Copy, Debug)]
+pub struct Snapshot<'a> {
+    pub step: u64,
+    pub t: f64,
+    pub x: &'a [[f64; 3]],
+    pub v: &'a [[f64; 3]],
+}
+
+impl Model {
+    /// Rejects a model the definitions cannot be evaluated on.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.bodies.is_empty() {
+            return Err("the scene has no bodies".into());
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !(b.mass.is_finite() && b.mass > 0.0) {
+                return Err(format!(
+                    "body {i}: mass must be finite and positive, got {}",
+                    b.mass
+                ));
+            }
+            if !b.charge.is_finite() {
+                return Err(format!("body {i}: charge must be finite, got {}", b.charge));
+            }
+        }
+        for (n, t) in self.terms.iter().enumerate() {
+            let spec = t.kind.spec();
+            let name = spec.name;
+            if t.params.len() != spec.width() {
+                return Err(format!(
+                    "term {n} ({name}): {} parameters, expected {}",
+                    t.params.len(),
+                    spec.width()
+                ));
+            }
+            if let Some(p) = t.params.iter().find(|p| !p.is_finite()) {
+                return Err(format!("term {n} ({name}): non-finite parameter {p}"));
+            }
+            let sites_ok = match spec.shape {
+                Shape::Bond(arity) => t.sites.len() == arity,
+                Shape::Pairwise | Shape::External => t.sites.is_empty(),
+            };
+            if !sites_ok {
+                return Err(format!(
+                    "term {n} ({name}): wrong number of sites ({})",
+                    t.sites.len()
+                ));
+            }
+            if let Some(&s) = t.sites.iter().find(|&&s| s >= self.bodies.len()) {
+                return Err(format!(
+                    "term {n} ({name}): body {s} does not exist ({} bodies)",
+                    self.bodies.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Rejects a state that does not fit the model or holds a non-finite number.
+    pub fn check_state(&self, s: &Snapshot) -> Result<(), String> {
+        let n = self.bodies.len();
+        if s.x.len() != n || s.v.len() != n {
+            return Err(format!(
+                "state has {} positions and {} velocities for {n} bodies",
+                s.x.len(),
+                s.v.len()
+            ));
+        }
+        if !s.t.is_finite() {
+            return Err(format!("step {}: time is {}", s.step, s.t));
+        }
+        for (i, (x, v)) in s.x.iter().zip(s.v).enumerate() {
+            if x.iter().chain(v).any(|c| !c.is_finite()) {
+                return Err(format!(
+                    "step {}: body {i} has a non-finite coordinate ({x:?}, {v:?})",
+                    s.step
+                ));
+            }
+        }
+        Ok(())
+    }
+}

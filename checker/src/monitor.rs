@@ -1,0 +1,280 @@
+//! The checker's side of a run: it is handed exact states, evaluates each declared claim's
+//! quantity on them with interval arithmetic, and feeds the enclosures to the decision.
+
+use crate::claims::{Claim, ClaimKind};
+use crate::decision::{decide_static, Breach, Judge, Verdict};
+use crate::model::{Model, Snapshot};
+use crate::quantities::Lifted;
+use crate::real::point;
+use crate::terms::Kind;
+use inari::Interval;
+use serde::Serialize;
+
+/// Unit round-off of binary64.
+const U: f64 = f64::EPSILON / 2.0;
+/// Round-off budget per step and per unit of Σm|v| (resp. Σm|x||v|) for momentum claims given
+/// without a tolerance: velocity Verlet conserves both exactly in exact arithmetic, so only
+/// rounding can move them, by about 2u·Σm|v| per step; the budget leaves a factor 8 of margin.
+const ROUNDOFF_BUDGET: f64 = 16.0 * U;
+
+/// Why a run must stop.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Halt {
+    /// A claim is certainly violated at this checkpoint.
+    Breach(Breach),
+    /// The state cannot be evaluated (non-finite coordinates, wrong size).
+    InvalidState(String),
+}
+
+/// One checkpoint's enclosure of a claim's deviation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mark {
+    pub step: u64,
+    pub deviation: Interval,
+}
+
+impl Serialize for Mark {
+    /// `[step, lo, hi]`; the endpoints round-trip exactly (finite values as JSON numbers
+    /// with serde_json's float_roundtrip, the infinities as the strings "inf"/"-inf").
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple;
+        let exact = |x: f64| match x {
+            x if x.is_finite() => serde_json::json!(x),
+            x if x > 0.0 => serde_json::json!("inf"),
+            x if x < 0.0 => serde_json::json!("-inf"),
+            _ => serde_json::json!("nan"),
+        };
+        let mut t = s.serialize_tuple(3)?;
+        t.serialize_element(&self.step)?;
+        t.serialize_element(&exact(self.deviation.inf()))?;
+        t.serialize_element(&exact(self.deviation.sup()))?;
+        t.end()
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Trail {
+    pub claim: ClaimKind,
+    pub marks: Vec<Mark>,
+}
+
+/// Energy removed by dissipative terms, integrated by the trapezoid rule over the checkpoints.
+struct Ledger {
+    t: f64,
+    power: Interval,
+    dissipated: Interval,
+}
+
+struct Track {
+    claim: Claim,
+    judge: Judge,
+    marks: Vec<Mark>,
+    ledger: Option<Ledger>,
+    scale: f64,
+    stopped: Option<Verdict>,
+}
+
+struct Reference {
+    energy: Interval,
+    momentum: [Interval; 3],
+    angular: [Interval; 3],
+}
+
+pub struct Monitor {
+    model: Model,
+    tracks: Vec<Track>,
+    last_step: u64,
+    reference: Option<Reference>,
+}
+
+/// What the checker concluded about a run.
+pub struct Outcome {
+    pub verdicts: Vec<Verdict>,
+    pub trails: Vec<Trail>,
+    /// Dissipative terms that removed energy (the energy claim was then a balance).
+    pub dissipators: Vec<Kind>,
+}
+
+impl Monitor {
+    pub fn new(model: Model, claims: Vec<Claim>, last_step: u64) -> Result<Self, String> {
+        model.validate()?;
+        for c in &claims {
+            if c.kind.needs_tol() && c.tol.is_none() {
+                return Err(format!("{} needs a tolerance", c.kind.name()));
+            }
+            if c.every == 0 {
+                return Err(format!("{}: every must be at least 1", c.kind.name()));
+            }
+        }
+        let tracks = claims
+            .into_iter()
+            .map(|claim| Track {
+                judge: Judge::new(claim.kind),
+                claim,
+                marks: vec![],
+                ledger: None,
+                scale: 0.0,
+                stopped: None,
+            })
+            .collect();
+        Ok(Monitor {
+            model,
+            tracks,
+            last_step,
+            reference: None,
+        })
+    }
+
+    /// Checks the claims due at this state. The first state handed in is the reference.
+    pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
+        let last = self.last_step;
+        let due = |c: &Claim| c.kind.is_dynamic() && (s.step % c.every == 0 || s.step == last);
+        if self.reference.is_some() && !self.tracks.iter().any(|t| due(&t.claim)) {
+            return Ok(());
+        }
+        if let Err(e) = self.model.check_state(s) {
+            for t in self.tracks.iter_mut().filter(|t| t.claim.kind.is_dynamic()) {
+                t.stopped = Some(Verdict::Refuted {
+                    claim: t.claim.kind,
+                    reason: e.clone(),
+                });
+            }
+            return Err(Halt::InvalidState(e));
+        }
+        let q = Lifted::new(&self.model, s, &Interval::EMPTY);
+        let model = &self.model;
+        let Some(r) = &self.reference else {
+            let power = q.dissipated_power(model);
+            for t in &mut self.tracks {
+                if t.claim.kind == ClaimKind::EnergyConservation {
+                    t.ledger = Some(Ledger {
+                        t: s.t,
+                        power,
+                        dissipated: point(0.0),
+                    });
+                }
+            }
+            self.reference = Some(Reference {
+                energy: q.energy(model),
+                momentum: q.momentum(),
+                angular: q.angular_momentum(),
+            });
+            return Ok(());
+        };
+        for t in self
+            .tracks
+            .iter_mut()
+            .filter(|t| due(&t.claim) && t.stopped.is_none())
+        {
+            let (deviation, tol) = match t.claim.kind {
+                ClaimKind::EnergyConservation => {
+                    let h = q.energy(model);
+                    let balance = match &mut t.ledger {
+                        Some(l) => {
+                            let power = q.dissipated_power(model);
+                            let dt = point(s.t) - point(l.t);
+                            l.dissipated = l.dissipated + dt * (l.power + power) * point(0.5);
+                            (l.t, l.power) = (s.t, power);
+                            h + l.dissipated
+                        }
+                        None => h,
+                    };
+                    (
+                        (balance - r.energy).abs() / r.energy.abs(),
+                        t.claim.tol.unwrap_or(f64::NAN),
+                    )
+                }
+                ClaimKind::MomentumConservation => {
+                    t.scale = t.scale.max(weighted_speed(model, s, |_| point(1.0)));
+                    (worst(q.momentum(), r.momentum), budget(t, s.step))
+                }
+                ClaimKind::AngularMomentumConservation => {
+                    t.scale = t.scale.max(weighted_speed(model, s, norm1));
+                    (worst(q.angular_momentum(), r.angular), budget(t, s.step))
+                }
+                ClaimKind::DimensionalConsistency => continue,
+            };
+            t.marks.push(Mark {
+                step: s.step,
+                deviation,
+            });
+            if let Err(b) = t.judge.admit(s.step, deviation, tol) {
+                t.stopped = Some(Verdict::Fail(b.clone()));
+                return Err(Halt::Breach(b));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn finish(self) -> Outcome {
+        let model = self.model;
+        let mut dissipators = vec![];
+        let mut verdicts = vec![];
+        let mut trails = vec![];
+        for t in self.tracks {
+            if t.ledger.as_ref().is_some_and(|l| l.dissipated.sup() > 0.0) {
+                dissipators = model
+                    .terms
+                    .iter()
+                    .map(|t| t.kind)
+                    .filter(|k| k.dissipative())
+                    .collect();
+                dissipators.dedup();
+            }
+            verdicts.push(match (t.stopped, t.claim.kind) {
+                (Some(v), _) => v,
+                (None, ClaimKind::DimensionalConsistency) => {
+                    decide_static(ClaimKind::DimensionalConsistency, dimensions(&model))
+                }
+                (None, _) => t.judge.finish(),
+            });
+            trails.push(Trail {
+                claim: t.claim.kind,
+                marks: t.marks,
+            });
+        }
+        Outcome {
+            verdicts,
+            trails,
+            dissipators,
+        }
+    }
+}
+
+/// Every term kind in the model has a homogeneous, energy-valued definition.
+fn dimensions(model: &Model) -> Result<(), String> {
+    model
+        .terms
+        .iter()
+        .try_for_each(|t| t.kind.check_dimensions())
+}
+
+/// max over components of |a − b|.
+fn worst(a: [Interval; 3], b: [Interval; 3]) -> Interval {
+    (0..3)
+        .map(|c| (a[c] - b[c]).abs())
+        .fold(point(0.0), |m, d| m.max(d))
+}
+
+/// Upper bound of Σ m·w(x)·|v|₁, the scale that round-off in Σmv (w = 1) or Σm x×v (w = |x|₁)
+/// is proportional to.
+fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Interval) -> f64 {
+    let mut sum = point(0.0);
+    for (b, (x, v)) in model.bodies.iter().zip(s.x.iter().zip(s.v)) {
+        let speed = norm1(v);
+        sum = sum + point(b.mass) * w(x) * speed;
+    }
+    sum.sup()
+}
+
+/// |a|₁ as an interval.
+fn norm1(a: &[f64; 3]) -> Interval {
+    a.iter().fold(point(0.0), |s, &c| s + point(c).abs())
+}
+
+/// The declared tolerance, or the round-off budget after `step` steps.
+fn budget(t: &Track, step: u64) -> f64 {
+    t.claim
+        .tol
+        .unwrap_or(ROUNDOFF_BUDGET * step.max(1) as f64 * t.scale)
+}

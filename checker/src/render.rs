@@ -1,0 +1,103 @@
+//! Verdicts as one line of text each; `lagra run` and a re-check print the same lines.
+
+use crate::claims::ClaimKind;
+use crate::decision::Verdict;
+
+/// `x` with two significant digits, rounded *up*, so a printed bound is still a bound.
+pub fn up(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x:e}");
+    }
+    let s = format!("{x:.1e}");
+    let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+    let (mut m, mut e): (f64, i32) = (m.parse().unwrap_or(x), e.parse().unwrap_or(0));
+    if m * 10f64.powi(e) < x {
+        m = (m * 10.0 + 1.0).round() / 10.0;
+        if m >= 10.0 {
+            (m, e) = (m / 10.0, e + 1);
+        }
+    }
+    format!(
+        "{m:.1}e{}{:02}",
+        if e < 0 { '-' } else { '+' },
+        e.unsigned_abs()
+    )
+}
+
+/// The quantity a claim bounds, as printed: e.g. `|ΔH|/|H₀|`.
+fn measure(kind: ClaimKind, balance: bool) -> &'static str {
+    match kind {
+        ClaimKind::EnergyConservation if balance => "|H+Q−H₀|/|H₀|",
+        ClaimKind::EnergyConservation => "|ΔH|/|H₀|",
+        ClaimKind::MomentumConservation => "|ΔP|",
+        ClaimKind::AngularMomentumConservation => "|ΔL|",
+        ClaimKind::DimensionalConsistency => "",
+    }
+}
+
+/// One verdict line. `balance` names the dissipative terms when energy is a balance;
+/// `has_tol` tells whether the tolerance was declared or is the round-off budget.
+pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
+    let name = v.claim().name();
+    let q = measure(v.claim(), !balance.is_empty());
+    let tol = |t: f64| {
+        if has_tol {
+            format!("tol {t:e}")
+        } else {
+            format!("round-off budget {}", up(t))
+        }
+    };
+    let via = if balance.is_empty() {
+        String::new()
+    } else {
+        format!(", Q dissipated by {}", balance.join(", "))
+    };
+    match v {
+        Verdict::Pass(p) if p.claim() == ClaimKind::DimensionalConsistency => {
+            format!("{name} PASS  every term is homogeneous and energy-valued")
+        }
+        Verdict::Pass(p) => format!(
+            "{name} PASS  max{q} ≤ {} certified over {} checkpoints ({}{via})",
+            up(p.bound()),
+            p.checkpoints(),
+            tol(p.tol())
+        ),
+        Verdict::Fail(b) => format!(
+            "{name} FAIL  at step {}: {q} ∈ [{:e}, {}] > {}{via}",
+            b.step,
+            b.lower,
+            up(b.upper),
+            tol(b.tol)
+        ),
+        Verdict::Undecided(b) if b.lower.is_nan() => {
+            format!(
+                "{name} UNDECIDED  at step {}: the quantity could not be enclosed",
+                b.step
+            )
+        }
+        Verdict::Undecided(b) => format!(
+            "{name} UNDECIDED  at step {}: {q} ∈ [{:e}, {}] straddles {}{via}",
+            b.step,
+            b.lower,
+            up(b.upper),
+            tol(b.tol)
+        ),
+        Verdict::Refuted { reason, .. } => format!("{name} FAIL  {reason}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::up;
+
+    #[test]
+    fn printed_bounds_round_up() {
+        assert_eq!(up(2.1e-7), "2.1e-07");
+        assert_eq!(up(2.11e-7), "2.2e-07");
+        assert_eq!(up(9.96), "1.0e+01");
+        assert_eq!(up(1e-5), "1.0e-05");
+        for x in [1.234567e-9, 3.33333e3, 0.99999, 7.0000001] {
+            assert!(up(x).parse::<f64>().unwrap() >= x, "{x}");
+        }
+    }
+}

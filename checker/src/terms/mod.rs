@@ -1,0 +1,217 @@
+//! The closed vocabulary of interaction terms. Each term is one file holding its [`Spec`] (name,
+//! source keyword, shape, parameter dimensions) and its one [`Definition`] of the potential
+//! (and, for dissipative terms, of the Rayleigh dissipation function), generic over [`Real`].
+//! Adding a term is one file and one line in `vocabulary!` below.
+
+use crate::real::{Real, Vec3};
+use crate::units::{Dim, Dimension};
+use serde::{Deserialize, Serialize};
+
+/// What a term sees of one body: position, velocity, mass and charge.
+#[derive(Clone, Debug)]
+pub struct Site<R> {
+    pub x: Vec3<R>,
+    pub v: Vec3<R>,
+    pub m: R,
+    pub q: R,
+}
+
+/// Which bodies a term acts on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// Listed bodies, written `bond KEYWORD [i, j, ...] { .. }`; the number is the arity.
+    Bond(usize),
+    /// Every pair of bodies, written `interaction KEYWORD { .. }`.
+    Pairwise,
+    /// Every body on its own, written `KEYWORD { .. }`.
+    External,
+}
+
+impl Shape {
+    pub fn arity(self) -> usize {
+        match self {
+            Shape::Bond(n) => n,
+            Shape::Pairwise => 2,
+            Shape::External => 1,
+        }
+    }
+}
+
+/// One parameter: its name in the source, its dimension, its length (1 or 3) and default.
+#[derive(Clone, Copy, Debug)]
+pub struct Param {
+    pub name: &'static str,
+    pub dim: Dim,
+    pub len: usize,
+    pub default: Option<f64>,
+}
+
+impl Param {
+    pub const fn scalar(name: &'static str, dim: Dim) -> Param {
+        Param {
+            name,
+            dim,
+            len: 1,
+            default: None,
+        }
+    }
+    pub const fn vector(name: &'static str, dim: Dim) -> Param {
+        Param {
+            name,
+            dim,
+            len: 3,
+            default: None,
+        }
+    }
+    pub const fn or(self, default: f64) -> Param {
+        Param {
+            default: Some(default),
+            ..self
+        }
+    }
+}
+
+#[derive(Debug)]
+pub struct Spec {
+    /// The canonical name, used in the graph, the certificate and messages (`HarmonicBond`).
+    pub name: &'static str,
+    /// The word that selects the term in a `.lagra` file (`harmonic`).
+    pub keyword: &'static str,
+    pub shape: Shape,
+    pub params: &'static [Param],
+}
+
+impl Spec {
+    /// Number of reals in the flattened parameter list.
+    pub fn width(&self) -> usize {
+        self.params.iter().map(|p| p.len).sum()
+    }
+}
+
+/// One term's physics, written once.
+pub trait Definition {
+    const SPEC: Spec;
+    /// Potential energy of the sites `s` (in the order the shape gives) with parameters `p`
+    /// (flattened in the order of `SPEC.params`).
+    fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R;
+    /// Rayleigh dissipation function F: the term removes energy at the rate 2F.
+    /// `None` for a conservative term.
+    fn rayleigh<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
+        None
+    }
+}
+
+macro_rules! vocabulary {
+    ($($kind:ident => $module:ident),* $(,)?) => {
+        $(mod $module; pub use $module::$kind;)*
+
+        /// Every term kind there is.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+        pub enum Kind { $($kind),* }
+
+        impl Kind {
+            pub const ALL: &'static [Kind] = &[$(Kind::$kind),*];
+            pub fn spec(self) -> &'static Spec {
+                match self { $(Kind::$kind => &<$kind as Definition>::SPEC),* }
+            }
+            pub fn potential<R: Real>(self, p: &[R], s: &[&Site<R>]) -> R {
+                match self { $(Kind::$kind => $kind::potential(p, s)),* }
+            }
+            pub fn rayleigh<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
+                match self { $(Kind::$kind => $kind::rayleigh(p, s)),* }
+            }
+        }
+    };
+}
+
+vocabulary! {
+    HarmonicBond => harmonic_bond,
+    UniformAcceleration => uniform_acceleration,
+    Gravity => gravity,
+}
+
+impl Kind {
+    pub fn name(self) -> &'static str {
+        self.spec().name
+    }
+
+    /// The definition evaluated over dimensions: parameters carry their declared dimension,
+    /// sites carry L, L·T⁻¹, M, Q. Returns (potential, dissipation function).
+    fn dimensions(self) -> (Dimension, Option<Dimension>) {
+        let spec = self.spec();
+        let p: Vec<Dimension> = spec
+            .params
+            .iter()
+            .flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len))
+            .collect();
+        let site = Site {
+            x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
+            v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
+            m: Dimension::of(Dim::MASS),
+            q: Dimension::of(Dim::CHARGE),
+        };
+        let s = vec![&site; spec.shape.arity()];
+        (self.potential(&p, &s), self.rayleigh(&p, &s))
+    }
+
+    /// Whether the definition has a dissipation function.
+    pub fn dissipative(self) -> bool {
+        self.dimensions().1.is_some()
+    }
+
+    /// Proves the definition homogeneous: its potential is an energy and its dissipation
+    /// function (if any) a power, with no sum of unlike dimensions on the way.
+    pub fn check_dimensions(self) -> Result<(), String> {
+        let (v, f) = self.dimensions();
+        let expect = |what: &str, got: Dimension, want: Dim| match got.0 {
+            Ok(d) if d == want => Ok(()),
+            Ok(d) => Err(format!(
+                "{}: {what} has dimension {d}, not {want}",
+                self.name()
+            )),
+            Err(e) => Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
+        };
+        expect("potential", v, Dim::ENERGY)?;
+        match f {
+            Some(f) => expect("dissipation function", f, Dim::ENERGY.div(Dim::TIME)),
+            None => Ok(()),
+        }
+    }
+
+    /// The term selected by `keyword` among the terms whose shape satisfies `fits`.
+    pub fn lookup(keyword: &str, fits: impl Fn(Shape) -> bool) -> Option<Kind> {
+        Kind::ALL
+            .iter()
+            .copied()
+            .find(|k| k.spec().keyword == keyword && fits(k.spec().shape))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_keyword_is_unique_per_shape() {
+        for a in Kind::ALL {
+            for b in Kind::ALL {
+                if a != b && a.spec().keyword == b.spec().keyword {
+                    assert_ne!(a.spec().shape, b.spec().shape, "{a:?} and {b:?} collide");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_definition_is_homogeneous() {
+        for k in Kind::ALL {
+            assert_eq!(k.check_dimensions(), Ok(()));
+        }
+    }
+
+    #[test]
+    fn only_harmonic_bond_dissipates() {
+        let d: Vec<_> = Kind::ALL.iter().filter(|k| k.dissipative()).collect();
+        assert_eq!(d, [&Kind::HarmonicBond]);
+    }
+}

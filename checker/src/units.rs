@@ -1,0 +1,181 @@
+//! Dimensions as types: exponents of mass, length, time and charge.
+//!
+//! [`Dim`] is the type of a quantity. [`Dimension`] is a [`Real`] whose "value" is a dimension,
+//! so that evaluating a term's one definition over it *proves* the definition homogeneous: every
+//! sum adds like to like, every square root has even exponents, and the result is an energy.
+
+use crate::real::Real;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// Exponents of M, L, T, Q (charge).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Serialize, Deserialize)]
+pub struct Dim(pub [i8; 4]);
+
+impl Dim {
+    pub const NONE: Dim = Dim([0, 0, 0, 0]);
+    pub const MASS: Dim = Dim([1, 0, 0, 0]);
+    pub const LENGTH: Dim = Dim([0, 1, 0, 0]);
+    pub const TIME: Dim = Dim([0, 0, 1, 0]);
+    pub const CHARGE: Dim = Dim([0, 0, 0, 1]);
+    pub const VELOCITY: Dim = Dim([0, 1, -1, 0]);
+    pub const ACCELERATION: Dim = Dim([0, 1, -2, 0]);
+    pub const ENERGY: Dim = Dim([1, 2, -2, 0]);
+    pub const STIFFNESS: Dim = Dim([1, 0, -2, 0]);
+    pub const DAMPING: Dim = Dim([1, 0, -1, 0]);
+    pub const GRAVITATIONAL: Dim = Dim([-1, 3, -2, 0]);
+
+    pub fn mul(self, o: Dim) -> Dim {
+        Dim(std::array::from_fn(|i| self.0[i] + o.0[i]))
+    }
+    pub fn div(self, o: Dim) -> Dim {
+        Dim(std::array::from_fn(|i| self.0[i] - o.0[i]))
+    }
+    pub fn pow(self, n: i8) -> Dim {
+        Dim(self.0.map(|e| e * n))
+    }
+
+    /// A name for the common dimensions, used in error messages.
+    pub fn describe(self) -> Option<&'static str> {
+        const NAMES: [(Dim, &str); 12] = [
+            (Dim::NONE, "dimensionless"),
+            (Dim::MASS, "mass"),
+            (Dim::LENGTH, "length"),
+            (Dim::TIME, "time"),
+            (Dim::CHARGE, "charge"),
+            (Dim::VELOCITY, "velocity"),
+            (Dim::ACCELERATION, "acceleration"),
+            (Dim::ENERGY, "energy"),
+            (Dim::STIFFNESS, "energy/length²"),
+            (Dim::DAMPING, "mass/time"),
+            (Dim::GRAVITATIONAL, "length³/(mass·time²)"),
+            (Dim([1, 1, -2, 0]), "force"),
+        ];
+        NAMES.iter().find(|(d, _)| *d == self).map(|(_, n)| *n)
+    }
+}
+
+impl fmt::Display for Dim {
+    /// `M·L²·T⁻²`; the dimensionless type prints as `1`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const SUP: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+        let mut parts = Vec::new();
+        for (sym, &e) in ["M", "L", "T", "Q"].iter().zip(&self.0) {
+            if e == 0 {
+                continue;
+            }
+            let mut s = sym.to_string();
+            if e != 1 {
+                if e < 0 {
+                    s.push('⁻');
+                }
+                for c in e.unsigned_abs().to_string().chars() {
+                    s.push(SUP[c.to_digit(10).unwrap_or(0) as usize]);
+                }
+            }
+            parts.push(s);
+        }
+        if parts.is_empty() {
+            write!(f, "1")
+        } else {
+            write!(f, "{}", parts.join("·"))
+        }
+    }
+}
+
+/// A dimension computed through a definition, or the first inhomogeneity met on the way.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dimension(pub Result<Dim, String>);
+
+impl Dimension {
+    pub fn of(d: Dim) -> Self {
+        Dimension(Ok(d))
+    }
+    fn zip(self, o: Self, f: impl FnOnce(Dim, Dim) -> Result<Dim, String>) -> Self {
+        Dimension(self.0.and_then(|a| o.0.and_then(|b| f(a, b))))
+    }
+    fn same(self, o: Self, op: &str) -> Self {
+        self.zip(o, |a, b| {
+            if a == b {
+                Ok(a)
+            } else {
+                Err(format!("{op} of {a} and {b}"))
+            }
+        })
+    }
+}
+
+impl Add for Dimension {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        self.same(o, "sum")
+    }
+}
+impl Sub for Dimension {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        self.same(o, "difference")
+    }
+}
+impl Mul for Dimension {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        self.zip(o, |a, b| Ok(a.mul(b)))
+    }
+}
+impl Div for Dimension {
+    type Output = Self;
+    fn div(self, o: Self) -> Self {
+        self.zip(o, |a, b| Ok(a.div(b)))
+    }
+}
+impl Neg for Dimension {
+    type Output = Self;
+    fn neg(self) -> Self {
+        self
+    }
+}
+
+impl Real for Dimension {
+    /// Literal constants in a definition are pure numbers.
+    fn lift(&self, _c: f64) -> Self {
+        Dimension::of(Dim::NONE)
+    }
+    fn sqrt(self) -> Self {
+        Dimension(self.0.and_then(|d| {
+            if d.0.iter().all(|e| e % 2 == 0) {
+                Ok(Dim(d.0.map(|e| e / 2)))
+            } else {
+                Err(format!("square root of {d}"))
+            }
+        }))
+    }
+    fn powi(self, n: i32) -> Self {
+        Dimension(self.0.map(|d| d.pow(n as i8)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_uses_superscripts() {
+        assert_eq!(Dim::STIFFNESS.to_string(), "M·T⁻²");
+        assert_eq!(Dim::GRAVITATIONAL.to_string(), "M⁻¹·L³·T⁻²");
+        assert_eq!(Dim::NONE.to_string(), "1");
+    }
+
+    #[test]
+    fn inhomogeneous_sum_is_caught() {
+        let s = Dimension::of(Dim::LENGTH) + Dimension::of(Dim::TIME);
+        assert_eq!(s.0, Err("sum of L and T".into()));
+    }
+
+    #[test]
+    fn sqrt_needs_even_exponents() {
+        assert_eq!(Dimension::of(Dim::LENGTH.pow(2)).sqrt().0, Ok(Dim::LENGTH));
+        assert!(Dimension::of(Dim::LENGTH).sqrt().0.is_err());
+    }
+}

@@ -1,0 +1,489 @@
+//! From the parse tree to a [`Scene`]: templates resolved, terms looked up in the checker's
+//! vocabulary, every number checked for dimension and converted, every index checked.
+
+use super::block::{typed, value_span, word, Block, Reader};
+use super::diagnostic::{Diagnostic, Span};
+use super::{Pair, Rule};
+use crate::predict::{Prediction, PredictionKind};
+use crate::scene::{Scene, Solver};
+use crate::solvers::Integrator;
+use lagra_checker::claims::{Claim, ClaimKind};
+use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
+use lagra_checker::terms::{Kind, Shape};
+use lagra_checker::units::Dim;
+use std::collections::HashMap;
+
+/// Types every scene knows without declaring them: display sizes only.
+const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
+const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "size"];
+/// Run length when the solver gives neither `steps` nor `duration`.
+pub const DEFAULT_STEPS: u64 = 5000;
+
+fn err<T>(span: impl Into<Span>, msg: impl Into<String>) -> Result<T, Diagnostic> {
+    Err(Diagnostic::new(span.into(), msg))
+}
+
+struct Compiler<'a> {
+    rd: Reader,
+    templates: HashMap<&'a str, Block<'a>>,
+    bodies: Vec<Body>,
+    x0: Vec<[f64; 3]>,
+    v0: Vec<[f64; 3]>,
+    sizes: Vec<f64>,
+    terms: Vec<TermInstance>,
+    /// Where each bond's indices were written, checked once all entities are known.
+    indices: Vec<Vec<(usize, Span)>>,
+    claims: Vec<Claim>,
+    predictions: Vec<(PredictionKind, Option<f64>, Span)>,
+    solver: Option<Solver>,
+    description: Option<String>,
+    domain: Option<String>,
+}
+
+pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
+    let scene_span: Span = pair.as_span().into();
+    let mut inner = pair.into_inner();
+    let name = inner.next().expect("scene name").as_str().to_string();
+    let items: Vec<Pair> = inner.collect();
+
+    let mut system = None;
+    for u in items.iter().filter(|p| p.as_rule() == Rule::units) {
+        let w = u.clone().into_inner().nth(1).expect("units name");
+        if system.is_some() {
+            return err(u.as_span(), "units declared twice");
+        }
+        system = Some(match w.as_str() {
+            "reduced" => UnitSystem::Reduced,
+            "si" => UnitSystem::Si,
+            other => {
+                return err(
+                    w.as_span(),
+                    format!("unknown unit system `{other}`; expected reduced or si"),
+                )
+            }
+        });
+    }
+    let mut c = Compiler {
+        rd: Reader {
+            system: system.unwrap_or(UnitSystem::Reduced),
+        },
+        templates: HashMap::new(),
+        bodies: vec![],
+        x0: vec![],
+        v0: vec![],
+        sizes: vec![],
+        terms: vec![],
+        indices: vec![],
+        claims: vec![],
+        predictions: vec![],
+        solver: None,
+        description: None,
+        domain: None,
+    };
+    for item in items {
+        c.item(item)?;
+    }
+    c.finish(name, scene_span)
+}
+
+impl<'a> Compiler<'a> {
+    fn item(&mut self, item: Pair<'a>) -> Result<(), Diagnostic> {
+        let span: Span = item.as_span().into();
+        let rule = item.as_rule();
+        let mut parts = item.into_inner();
+        let mut next = || parts.next();
+        match rule {
+            Rule::units => Ok(()),
+            Rule::uses => {
+                self.domain = Some(next().and(next()).expect("domain").as_str().to_string());
+                Ok(())
+            }
+            Rule::description => {
+                if self.description.is_some() {
+                    return err(span, "second description");
+                }
+                let s = next()
+                    .and(next())
+                    .expect("string")
+                    .into_inner()
+                    .next()
+                    .expect("body");
+                self.description = Some(s.as_str().to_string());
+                Ok(())
+            }
+            Rule::template => {
+                let name = next().and(next()).expect("template name");
+                let block = Block::read(next(), span)?;
+                block.check_names(&format!("entity {}", name.as_str()), &ENTITY_FIELDS[1..])?;
+                if self.templates.contains_key(name.as_str())
+                    || BUILTIN_TYPES.iter().any(|t| t.0 == name.as_str())
+                {
+                    return err(
+                        name.as_span(),
+                        format!("entity type `{}` is defined twice", name.as_str()),
+                    );
+                }
+                self.templates.insert(name.as_str(), block);
+                Ok(())
+            }
+            Rule::entity => {
+                let block = Block::read(next().and(next()), span)?;
+                self.entity(block)
+            }
+            Rule::bond => {
+                let kw = next().and(next()).expect("bond keyword");
+                let idx = next().expect("indices");
+                let kind = lookup(&kw, |s| matches!(s, Shape::Bond(_)), "bond")?;
+                let arity = kind.spec().shape.arity();
+                let indices: Vec<(usize, Span)> = idx
+                    .clone()
+                    .into_inner()
+                    .map(|i| match i.as_str().parse::<usize>() {
+                        Ok(n) => Ok((n, i.as_span().into())),
+                        Err(_) => err(
+                            i.as_span(),
+                            format!("body index `{}` is too large", i.as_str()),
+                        ),
+                    })
+                    .collect::<Result<_, _>>()?;
+                if indices.len() != arity {
+                    return err(
+                        idx.as_span(),
+                        format!(
+                            "{} joins {arity} bodies, got {}",
+                            kind.name(),
+                            indices.len()
+                        ),
+                    );
+                }
+                for (n, (a, s)) in indices.iter().enumerate() {
+                    if indices[..n].iter().any(|(b, _)| a == b) {
+                        return err(*s, format!("{} lists body {a} twice", kind.name()));
+                    }
+                }
+                let params = self.params(
+                    kind,
+                    Block::read(next(), kw.as_span().into())?,
+                    kw.as_span().into(),
+                )?;
+                self.terms.push(TermInstance {
+                    kind,
+                    sites: indices.iter().map(|i| i.0).collect(),
+                    params,
+                });
+                self.indices.push(indices);
+                Ok(())
+            }
+            Rule::interaction | Rule::external => {
+                let kw = if rule == Rule::interaction {
+                    next().and(next())
+                } else {
+                    next()
+                }
+                .expect("keyword");
+                let (what, shape) = if rule == Rule::interaction {
+                    ("interaction", Shape::Pairwise)
+                } else {
+                    ("term", Shape::External)
+                };
+                let kind = lookup(&kw, |s| s == shape, what)?;
+                let params = self.params(
+                    kind,
+                    Block::read(next(), kw.as_span().into())?,
+                    kw.as_span().into(),
+                )?;
+                self.terms.push(TermInstance {
+                    kind,
+                    sites: vec![],
+                    params,
+                });
+                self.indices.push(vec![]);
+                Ok(())
+            }
+            Rule::expect => {
+                let name = next().expect("claim name");
+                let block = Block::read(next(), name.as_span().into())?;
+                self.expect(name, block)
+            }
+            Rule::predict => {
+                let name = next().expect("prediction name");
+                let mut block = Block::read(next(), name.as_span().into())?;
+                let kind = PredictionKind::from_name(name.as_str()).ok_or_else(|| {
+                    let known: Vec<_> = PredictionKind::ALL.iter().map(|k| k.name()).collect();
+                    Diagnostic::new(
+                        name.as_span().into(),
+                        format!(
+                            "unknown prediction `{}`; known: {}",
+                            name.as_str(),
+                            known.join(", ")
+                        ),
+                    )
+                })?;
+                let tol = block
+                    .take("tol")
+                    .map(|f| self.rd.positive(&f, name.as_str(), Dim::NONE))
+                    .transpose()?;
+                block.check_names(name.as_str(), &[])?;
+                self.predictions.push((kind, tol, name.as_span().into()));
+                Ok(())
+            }
+            Rule::solver => {
+                if self.solver.is_some() {
+                    return err(span, "second solver block");
+                }
+                let block = Block::read(next().and(next()), span)?;
+                self.solver = Some(self.solver(block)?);
+                Ok(())
+            }
+            r => unreachable!("grammar produced {r:?} as an item"),
+        }
+    }
+
+    fn entity(&mut self, mut b: Block<'a>) -> Result<(), Diagnostic> {
+        let mut size = None;
+        let template = match b.take("type") {
+            None => None,
+            Some(f) => {
+                let (name, at) = word(&f, "entity")?;
+                if let Some(t) = BUILTIN_TYPES.iter().find(|t| t.0 == name) {
+                    size = Some(t.1);
+                    None
+                } else if let Some(t) = self.templates.get(name) {
+                    Some(t)
+                } else {
+                    let mut known: Vec<&str> = self
+                        .templates
+                        .keys()
+                        .copied()
+                        .chain(BUILTIN_TYPES.iter().map(|t| t.0))
+                        .collect();
+                    known.sort();
+                    return err(
+                        at,
+                        format!(
+                            "unknown entity type `{name}`; known types: {}",
+                            known.join(", ")
+                        ),
+                    );
+                }
+            }
+        };
+        b.check_names("entity", ENTITY_FIELDS)?;
+        let at = b.span;
+        let mut field = |name: &str| {
+            b.take(name)
+                .or_else(|| template.and_then(|t| t.get(name).cloned()))
+        };
+        let vec3 = |v: Vec<f64>| [v[0], v[1], v[2]];
+        let position =
+            field("position").ok_or_else(|| Diagnostic::new(at, "entity needs a position"))?;
+        let x = vec3(self.rd.numbers(&position, "entity", Dim::LENGTH, 3)?);
+        let v = match field("velocity") {
+            Some(f) => vec3(self.rd.numbers(&f, "entity", Dim::VELOCITY, 3)?),
+            None => [0.0; 3],
+        };
+        let mass = field("mass")
+            .ok_or_else(|| Diagnostic::new(at, "entity needs a mass (or a type that gives one)"))?;
+        let mass = self.rd.positive(&mass, "entity", Dim::MASS)?;
+        let charge = match field("charge") {
+            Some(f) => self.rd.numbers(&f, "entity", Dim::CHARGE, 1)?[0],
+            None => 0.0,
+        };
+        if let Some(f) = field("size") {
+            size = Some(self.rd.positive(&f, "entity", Dim::LENGTH)?);
+        }
+        self.bodies.push(Body { mass, charge });
+        self.x0.push(x);
+        self.v0.push(v);
+        self.sizes.push(size.unwrap_or(0.0));
+        Ok(())
+    }
+
+    /// The term's parameters in the order of its spec, each checked against its dimension.
+    fn params(&self, kind: Kind, mut b: Block, at: Span) -> Result<Vec<f64>, Diagnostic> {
+        let spec = kind.spec();
+        let mut out = vec![];
+        for p in spec.params {
+            match (b.take(p.name), p.default) {
+                (Some(f), _) => out.extend(self.rd.numbers(&f, spec.name, p.dim, p.len)?),
+                (None, Some(d)) => out.extend(std::iter::repeat_n(d, p.len)),
+                (None, None) => {
+                    return err(
+                        at,
+                        format!("{} needs `{}` ({})", spec.name, p.name, typed(p.dim)),
+                    )
+                }
+            }
+        }
+        let names: Vec<&str> = spec.params.iter().map(|p| p.name).collect();
+        b.check_names(spec.name, &names)?;
+        Ok(out)
+    }
+
+    fn expect(&mut self, name: Pair, mut b: Block) -> Result<(), Diagnostic> {
+        let at: Span = name.as_span().into();
+        let kind = ClaimKind::from_name(name.as_str()).ok_or_else(|| {
+            let known: Vec<_> = ClaimKind::ALL.iter().map(|k| k.name()).collect();
+            Diagnostic::new(
+                at,
+                format!(
+                    "unknown claim `{}`; known claims: {}",
+                    name.as_str(),
+                    known.join(", ")
+                ),
+            )
+        })?;
+        if self.claims.iter().any(|c| c.kind == kind) {
+            return err(at, format!("{} is declared twice", kind.name()));
+        }
+        let tol = match (b.take("tol"), kind.tol_dim()) {
+            (Some(f), Some(dim)) => Some(self.rd.positive(&f, kind.name(), dim)?),
+            _ => None,
+        };
+        if kind.needs_tol() && tol.is_none() {
+            return err(
+                at,
+                format!(
+                    "{} needs a tolerance: `{{ tol: 1e-5 }}` (relative)",
+                    kind.name()
+                ),
+            );
+        }
+        let every = if kind.is_dynamic() {
+            b.take("every")
+                .map(|f| self.rd.count(&f, kind.name()))
+                .transpose()?
+        } else {
+            None
+        };
+        let allowed: &[&str] = if kind.is_dynamic() {
+            &["tol", "every"]
+        } else {
+            &[]
+        };
+        b.check_names(kind.name(), allowed)?;
+        self.claims.push(Claim {
+            kind,
+            tol,
+            every: every.unwrap_or(1),
+        });
+        Ok(())
+    }
+
+    fn solver(&self, mut b: Block) -> Result<Solver, Diagnostic> {
+        let integrator = match b.take("integrator") {
+            None => Integrator::VelocityVerlet,
+            Some(f) => {
+                let (name, at) = word(&f, "solver")?;
+                Integrator::from_name(name).ok_or_else(|| {
+                    let known: Vec<_> = Integrator::ALL.iter().map(|i| i.name()).collect();
+                    Diagnostic::new(
+                        at,
+                        format!("unknown integrator `{name}`; known: {}", known.join(", ")),
+                    )
+                })?
+            }
+        };
+        let dt = b
+            .take("dt")
+            .ok_or_else(|| Diagnostic::new(b.span, "solver needs a time step `dt`"))?;
+        let dt = self.rd.positive(&dt, "solver", Dim::TIME)?;
+        let steps = match (b.take("steps"), b.take("duration")) {
+            (Some(_), Some(d)) => return err(d.span, "give `steps` or `duration`, not both"),
+            (Some(s), None) => self.rd.count(&s, "solver")?,
+            (None, Some(d)) => {
+                let n = (self.rd.positive(&d, "solver", Dim::TIME)? / dt).round();
+                if !(1.0..=9.0e15).contains(&n) {
+                    return err(
+                        value_span(&d),
+                        format!("duration / dt = {n} steps is out of range"),
+                    );
+                }
+                n as u64
+            }
+            (None, None) => DEFAULT_STEPS,
+        };
+        let steps_per_frame = b
+            .take("steps_per_frame")
+            .map(|f| self.rd.count(&f, "solver"))
+            .transpose()?
+            .unwrap_or(10);
+        b.check_names("solver", &[])?;
+        Ok(Solver {
+            integrator,
+            dt,
+            steps,
+            steps_per_frame,
+        })
+    }
+
+    fn finish(self, name: String, at: Span) -> Result<Scene, Diagnostic> {
+        let n = self.bodies.len();
+        if n == 0 {
+            return err(at, format!("scene {name} has no entities"));
+        }
+        for (i, s) in self.indices.iter().flatten() {
+            if *i >= n {
+                return err(
+                    *s,
+                    format!(
+                        "body index {i} is out of range: the scene has {n} entities (0..{})",
+                        n - 1
+                    ),
+                );
+            }
+        }
+        let solver = self
+            .solver
+            .ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
+        let model = Model {
+            units: self.rd.system,
+            bodies: self.bodies,
+            terms: self.terms,
+        };
+        let predictions = self
+            .predictions
+            .into_iter()
+            .map(
+                |(kind, tol, s)| match kind.predict(&model, &self.x0, &self.v0) {
+                    Ok(predicted) => Ok(Prediction {
+                        kind,
+                        tol,
+                        predicted,
+                    }),
+                    Err(why) => err(s, format!("{}: {why}", kind.name())),
+                },
+            )
+            .collect::<Result<_, _>>()?;
+        Ok(Scene {
+            name,
+            description: self.description,
+            domain: self.domain,
+            model,
+            x0: self.x0,
+            v0: self.v0,
+            sizes: self.sizes,
+            claims: self.claims,
+            predictions,
+            solver,
+        })
+    }
+}
+
+fn lookup(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, what: &str) -> Result<Kind, Diagnostic> {
+    Kind::lookup(kw.as_str(), fits).ok_or_else(|| {
+        let known: Vec<_> = Kind::ALL
+            .iter()
+            .filter(|k| fits(k.spec().shape))
+            .map(|k| k.spec().keyword)
+            .collect();
+        Diagnostic::new(
+            kw.as_span().into(),
+            format!(
+                "unknown {what} `{}`; known: {}",
+                kw.as_str(),
+                known.join(", ")
+            ),
+        )
+    })
+}

@@ -1,0 +1,12 @@
+//! `lagra-kernel`: the `.lagra` language, the Lagrangian graph, fast forces, solvers and the
+//! run loop. Nothing here is trusted: the checker re-evaluates every claim on the exact states
+//! this crate produces.
+
+pub mod forces;
+pub mod graph;
+pub mod lang;
+pub mod predict;
+pub mod run;
+pub mod scene;
+pub mod solvers;
+pub mod state;

@@ -1,0 +1,170 @@
+//! The run loop: step the solver, hand every checkpoint's exact state to the checker, measure
+//! the predictions, write the trace. A certified failure, a singular force or a non-finite
+//! state halts the run at that step.
+
+use crate::graph::LagrangianGraph;
+use crate::predict::{Meter, Prediction};
+use crate::scene::Scene;
+use crate::solvers::VelocityVerlet;
+use crate::state::State;
+use lagra_checker::monitor::{Halt, Monitor, Outcome};
+use serde::Serialize;
+use std::io::Write;
+use std::time::Instant;
+
+/// Why a run stopped before its last step.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Stop {
+    /// The checker certified that a claim is violated (or could not evaluate the state).
+    Checker(Halt),
+    /// A force is undefined at this state.
+    Singular { step: u64, message: String },
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Measured {
+    pub name: &'static str,
+    pub predicted: f64,
+    pub measured: Option<f64>,
+    pub rel_diff: Option<f64>,
+    pub tol: Option<f64>,
+    /// Within `tol` (true when no tol was given and a period was measured).
+    pub agrees: bool,
+}
+
+pub struct Report {
+    pub steps: u64,
+    pub wall_s: f64,
+    pub stop: Option<Stop>,
+    pub outcome: Outcome,
+    pub predictions: Vec<Measured>,
+    pub state: State,
+}
+
+pub struct Options<'a> {
+    /// Overrides the scene's run length.
+    pub steps: Option<u64>,
+    /// One JSON line per frame.
+    pub trace: Option<&'a mut dyn Write>,
+}
+
+#[derive(Serialize)]
+struct TraceLine<'a> {
+    step: u64,
+    t: f64,
+    energy: f64,
+    x: &'a [[f64; 3]],
+    v: &'a [[f64; 3]],
+}
+
+/// Runs a scene. Errors are setup errors (a model the checker rejects, trace I/O).
+pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
+    let steps = opts.steps.unwrap_or(scene.solver.steps);
+    let dt = scene.solver.dt;
+    let graph = LagrangianGraph::new(&scene.model);
+    let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
+    let mut state = State {
+        step: 0,
+        t: 0.0,
+        x: scene.x0.clone(),
+        v: scene.v0.clone(),
+    };
+    let mut meters: Vec<(Meter, &Prediction)> = scene
+        .predictions
+        .iter()
+        .map(|p| (Meter::new(p, &scene.model), p))
+        .collect();
+
+    let start = Instant::now();
+    let mut stop = None;
+    let mut trace = |s: &State, potential: f64| -> Result<(), String> {
+        if let Some(w) = opts.trace.as_mut() {
+            let line = TraceLine {
+                step: s.step,
+                t: s.t,
+                energy: s.kinetic(&graph.masses) + potential,
+                x: &s.x,
+                v: &s.v,
+            };
+            serde_json::to_writer(&mut *w, &line).map_err(|e| e.to_string())?;
+            writeln!(w).map_err(|e| format!("writing the trace: {e}"))?;
+        }
+        Ok(())
+    };
+    match VelocityVerlet::new(&graph, &state) {
+        Err(e) => {
+            stop = Some(Stop::Singular {
+                step: 0,
+                message: e.to_string(),
+            })
+        }
+        Ok(mut solver) => {
+            if let Err(h) = monitor.observe(&state.snapshot()) {
+                stop = Some(Stop::Checker(h));
+            }
+            meters
+                .iter_mut()
+                .for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+            trace(&state, solver.potential)?;
+            while stop.is_none() && state.step < steps {
+                if let Err(e) = solver.step(&graph, &mut state, dt) {
+                    stop = Some(Stop::Singular {
+                        step: state.step + 1,
+                        message: e.to_string(),
+                    });
+                    break;
+                }
+                if !solver.potential.is_finite() {
+                    if let Some(b) = state.non_finite() {
+                        let msg =
+                            format!("step {}: body {b} has a non-finite coordinate", state.step);
+                        stop = Some(Stop::Checker(Halt::InvalidState(msg)));
+                        break;
+                    }
+                }
+                if let Err(h) = monitor.observe(&state.snapshot()) {
+                    stop = Some(Stop::Checker(h));
+                }
+                meters
+                    .iter_mut()
+                    .for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+                if state.step % scene.solver.steps_per_frame == 0 || state.step == steps {
+                    trace(&state, solver.potential)?;
+                }
+            }
+            if stop.is_none() {
+                if let Some(b) = state.non_finite() {
+                    stop = Some(Stop::Checker(Halt::InvalidState(format!(
+                        "step {}: body {b} has a non-finite coordinate",
+                        state.step
+                    ))));
+                }
+            }
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let predictions = meters
+        .iter()
+        .map(|(m, p)| {
+            let measured = m.measured();
+            let rel_diff = measured.map(|t| (t - p.predicted).abs() / p.predicted);
+            let agrees = rel_diff.is_some_and(|d| p.tol.is_none_or(|tol| d <= tol));
+            Measured {
+                name: p.kind.name(),
+                predicted: p.predicted,
+                measured,
+                rel_diff,
+                tol: p.tol,
+                agrees,
+            }
+        })
+        .collect();
+    Ok(Report {
+        steps: state.step,
+        wall_s,
+        stop,
+        outcome: monitor.finish(),
+        predictions,
+        state,
+    })
+}

@@ -1,0 +1,31 @@
+//! A compiled scene: the canonical model the checker sees, the initial state, the claims, the
+//! solver settings and the predictions to compare against.
+
+use crate::predict::Prediction;
+use crate::solvers::Integrator;
+use lagra_checker::claims::Claim;
+use lagra_checker::model::Model;
+
+#[derive(Clone, Debug)]
+pub struct Solver {
+    pub integrator: Integrator,
+    pub dt: f64,
+    pub steps: u64,
+    pub steps_per_frame: u64,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub description: Option<String>,
+    /// The physics domain named by `uses` (recorded, not interpreted).
+    pub domain: Option<String>,
+    pub model: Model,
+    pub x0: Vec<[f64; 3]>,
+    pub v0: Vec<[f64; 3]>,
+    /// Display size of each body (from `size` or its type); not part of the physics.
+    pub sizes: Vec<f64>,
+    pub claims: Vec<Claim>,
+    pub predictions: Vec<Prediction>,
+    pub solver: Solver,
+}

@@ -1,0 +1,33 @@
+//! `lagra`: run a scene and certify its claims.
+
+mod certificate;
+mod report;
+mod run;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Exit codes: 0 every claim PASSed, 1 a claim FAILed or was UNDECIDED (or a prediction
+/// disagreed, or the run halted), 2 bad input.
+#[derive(Parser)]
+#[command(
+    name = "lagra",
+    version,
+    about = "A physics engine whose program is the Lagrangian, with certified invariants"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a .lagra scene and certify its @expect claims with interval arithmetic.
+    Run(run::Args),
+}
+
+fn main() -> ExitCode {
+    match Cli::parse().command {
+        Command::Run(args) => run::main(args),
+    }
+}

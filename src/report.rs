@@ -1,0 +1,173 @@
+//! The run's report, as text for people and as JSON for machines (the same data).
+
+use lagra_checker::decision::Verdict;
+use lagra_checker::monitor::Halt;
+use lagra_checker::render::line;
+use lagra_kernel::run::{Measured, Report, Stop};
+use lagra_kernel::scene::Scene;
+use serde::Serialize;
+use std::fmt::Write;
+
+#[derive(Serialize)]
+pub struct TermCount {
+    pub kind: &'static str,
+    pub count: usize,
+    pub dissipative: bool,
+}
+
+#[derive(Serialize)]
+pub struct ClaimLine {
+    pub claim: &'static str,
+    pub line: String,
+    #[serde(flatten)]
+    pub verdict: Verdict,
+}
+
+#[derive(Serialize)]
+pub struct Summary {
+    pub file: String,
+    pub scene: String,
+    pub description: Option<String>,
+    pub bodies: usize,
+    pub terms: Vec<TermCount>,
+    pub integrator: &'static str,
+    pub dt: f64,
+    pub steps: u64,
+    pub wall_s: f64,
+    pub steps_per_s: f64,
+    pub ns_per_atom_step: f64,
+    pub claims: Vec<ClaimLine>,
+    pub predictions: Vec<Measured>,
+    /// Why the run stopped early, if it did.
+    pub halted: Option<String>,
+    pub passed: bool,
+}
+
+impl Summary {
+    pub fn new(file: &str, scene: &Scene, r: &Report) -> Summary {
+        let mut terms: Vec<TermCount> = vec![];
+        for t in &scene.model.terms {
+            match terms.iter_mut().find(|c| c.kind == t.kind.name()) {
+                Some(c) => c.count += 1,
+                None => terms.push(TermCount {
+                    kind: t.kind.name(),
+                    count: 1,
+                    dissipative: t.kind.dissipative(),
+                }),
+            }
+        }
+        let balance: Vec<&str> = r.outcome.dissipators.iter().map(|k| k.name()).collect();
+        let claims: Vec<ClaimLine> = r
+            .outcome
+            .verdicts
+            .iter()
+            .zip(&scene.claims)
+            .map(|(v, c)| {
+                let dissipators = if c.kind == lagra_checker::claims::ClaimKind::EnergyConservation
+                {
+                    &balance[..]
+                } else {
+                    &[]
+                };
+                ClaimLine {
+                    claim: c.kind.name(),
+                    line: line(v, dissipators, c.tol.is_some()),
+                    verdict: v.clone(),
+                }
+            })
+            .collect();
+        let halted = r.stop.as_ref().map(|s| match s {
+            Stop::Checker(Halt::Breach(b)) => format!(
+                "halted at step {}: {} is certainly violated",
+                b.step,
+                b.claim.name()
+            ),
+            Stop::Checker(Halt::InvalidState(m)) => format!("halted: {m}"),
+            Stop::Singular { step, message } => format!("halted at step {step}: {message}"),
+        });
+        let passed = halted.is_none()
+            && claims.iter().all(|c| c.verdict.is_pass())
+            && r.predictions.iter().all(|p| p.agrees);
+        let atom_steps = r.steps as f64 * scene.model.bodies.len() as f64;
+        Summary {
+            file: file.to_string(),
+            scene: scene.name.clone(),
+            description: scene.description.clone(),
+            bodies: scene.model.bodies.len(),
+            terms,
+            integrator: scene.solver.integrator.name(),
+            dt: scene.solver.dt,
+            steps: r.steps,
+            wall_s: r.wall_s,
+            steps_per_s: r.steps as f64 / r.wall_s,
+            ns_per_atom_step: r.wall_s * 1e9 / atom_steps,
+            claims,
+            predictions: r.predictions.clone(),
+            halted,
+            passed,
+        }
+    }
+
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let desc = self
+            .description
+            .as_deref()
+            .map(|d| format!(" — {d}"))
+            .unwrap_or_default();
+        let _ = writeln!(s, "scene       {}{desc}", self.scene);
+        let terms: Vec<String> = self
+            .terms
+            .iter()
+            .map(|t| {
+                format!(
+                    "{} ×{}{}",
+                    t.kind,
+                    t.count,
+                    if t.dissipative { " (dissipative)" } else { "" }
+                )
+            })
+            .collect();
+        let terms = if terms.is_empty() {
+            "none (free particles)".to_string()
+        } else {
+            terms.join(", ")
+        };
+        let _ = writeln!(s, "bodies      {}", self.bodies);
+        let _ = writeln!(s, "terms       {terms}");
+        let _ = writeln!(
+            s,
+            "integrator  {}, dt {}, {} steps",
+            self.integrator, self.dt, self.steps
+        );
+        let _ = writeln!(
+            s,
+            "wall        {:.3} s ({:.0} steps/s)",
+            self.wall_s, self.steps_per_s
+        );
+        for c in &self.claims {
+            let _ = writeln!(s, "{}", c.line);
+        }
+        for p in &self.predictions {
+            let _ = match (p.measured, p.rel_diff) {
+                (Some(m), Some(d)) => writeln!(
+                    s,
+                    "{} {}  measured {m:.6} predicted {:.6} rel diff {d:.1e}{}",
+                    p.name,
+                    if p.agrees { "agrees" } else { "DISAGREES" },
+                    p.predicted,
+                    p.tol.map(|t| format!(" (tol {t:e})")).unwrap_or_default()
+                ),
+                _ => writeln!(
+                    s,
+                    "{} NOT MEASURED  predicted {:.6}; the run saw too little of the motion",
+                    p.name, p.predicted
+                ),
+            };
+        }
+        if let Some(h) = &self.halted {
+            let _ = writeln!(s, "{h}");
+        }
+        s
+    }
+}
