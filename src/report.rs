@@ -2,7 +2,7 @@
 
 use lagra_checker::decision::Verdict;
 use lagra_checker::monitor::Halt;
-use lagra_checker::render::line;
+use lagra_checker::render::{line, sci, up};
 use lagra_kernel::run::{Measured, Report, Stop};
 use lagra_kernel::scene::Scene;
 use serde::Serialize;
@@ -152,11 +152,12 @@ impl Summary {
             let _ = match (p.measured, p.rel_diff) {
                 (Some(m), Some(d)) => writeln!(
                     s,
-                    "{} {}  measured {m:.6} predicted {:.6} rel diff {d:.1e}{}",
+                    "{} {}  measured {m:.6} predicted {:.6} rel diff {}{}",
                     p.name,
                     if p.agrees { "agrees" } else { "DISAGREES" },
                     p.predicted,
-                    p.tol.map(|t| format!(" (tol {t:e})")).unwrap_or_default()
+                    up(d),
+                    p.tol.map(|t| format!(" (tol {})", sci(t))).unwrap_or_default()
                 ),
                 _ => writeln!(
                     s,

@@ -3,10 +3,21 @@
 use crate::claims::ClaimKind;
 use crate::decision::Verdict;
 
+/// `x` in scientific notation with a two-digit exponent (`1e-05`), exactly as given.
+pub fn sci(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let s = format!("{x:e}");
+    let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+    let e: i32 = e.parse().unwrap_or(0);
+    format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.unsigned_abs())
+}
+
 /// `x` with two significant digits, rounded *up*, so a printed bound is still a bound.
 pub fn up(x: f64) -> String {
     if !x.is_finite() || x == 0.0 {
-        return format!("{x:e}");
+        return format!("{x}");
     }
     let s = format!("{x:.1e}");
     let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
@@ -42,7 +53,7 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
     let q = measure(v.claim(), !balance.is_empty());
     let tol = |t: f64| {
         if has_tol {
-            format!("tol {t:e}")
+            format!("tol {}", sci(t))
         } else {
             format!("round-off budget {}", up(t))
         }
@@ -63,9 +74,9 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             tol(p.tol())
         ),
         Verdict::Fail(b) => format!(
-            "{name} FAIL  at step {}: {q} ∈ [{:e}, {}] > {}{via}",
+            "{name} FAIL  at step {}: {q} ∈ [{}, {}] > {}{via}",
             b.step,
-            b.lower,
+            sci(b.lower),
             up(b.upper),
             tol(b.tol)
         ),
@@ -76,9 +87,9 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             )
         }
         Verdict::Undecided(b) => format!(
-            "{name} UNDECIDED  at step {}: {q} ∈ [{:e}, {}] straddles {}{via}",
+            "{name} UNDECIDED  at step {}: {q} ∈ [{}, {}] straddles {}{via}",
             b.step,
-            b.lower,
+            sci(b.lower),
             up(b.upper),
             tol(b.tol)
         ),
@@ -88,7 +99,14 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::up;
+    use super::{sci, up};
+
+    #[test]
+    fn exact_values_keep_every_digit() {
+        assert_eq!(sci(1e-5), "1e-05");
+        assert_eq!(sci(1.0090128104926887e-5), "1.0090128104926887e-05");
+        assert_eq!(sci(0.0), "0");
+    }
 
     #[test]
     fn printed_bounds_round_up() {
