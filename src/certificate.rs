@@ -35,28 +35,15 @@ struct Certificate<'a> {
     verdicts: Vec<&'a str>,
 }
 
-pub fn write(
-    path: &Path,
-    source: &str,
-    scene: &Scene,
-    r: &Report,
-    s: &Summary,
-) -> std::io::Result<()> {
-    let digest: String = Sha256::digest(source.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+pub fn write(path: &Path, source: &str, scene: &Scene, r: &Report, s: &Summary) -> std::io::Result<()> {
+    let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
     let c = Certificate {
         format: FORMAT,
         scene: &scene.name,
         digest: format!("sha256:{digest}"),
         model: &scene.model,
         claims: &scene.claims,
-        run: Run {
-            integrator: scene.solver.integrator.name(),
-            dt: scene.solver.dt,
-            steps: r.steps,
-        },
+        run: Run { integrator: scene.solver.integrator.name(), dt: scene.solver.dt, steps: r.steps },
         trails: &r.outcome.trails,
         verdicts: s.claims.iter().map(|c| c.line.as_str()).collect(),
     };

@@ -49,11 +49,7 @@ impl Summary {
         for t in &scene.model.terms {
             match terms.iter_mut().find(|c| c.kind == t.kind.name()) {
                 Some(c) => c.count += 1,
-                None => terms.push(TermCount {
-                    kind: t.kind.name(),
-                    count: 1,
-                    dissipative: t.kind.dissipative(),
-                }),
+                None => terms.push(TermCount { kind: t.kind.name(), count: 1, dissipative: t.kind.dissipative() }),
             }
         }
         let balance: Vec<&str> = r.outcome.dissipators.iter().map(|k| k.name()).collect();
@@ -63,31 +59,20 @@ impl Summary {
             .iter()
             .zip(&scene.claims)
             .map(|(v, c)| {
-                let dissipators = if c.kind == lagra_checker::claims::ClaimKind::EnergyConservation
-                {
-                    &balance[..]
-                } else {
-                    &[]
-                };
-                ClaimLine {
-                    claim: c.kind.name(),
-                    line: line(v, dissipators, c.tol.is_some()),
-                    verdict: v.clone(),
-                }
+                let dissipators =
+                    if c.kind == lagra_checker::claims::ClaimKind::EnergyConservation { &balance[..] } else { &[] };
+                ClaimLine { claim: c.kind.name(), line: line(v, dissipators, c.tol.is_some()), verdict: v.clone() }
             })
             .collect();
         let halted = r.stop.as_ref().map(|s| match s {
-            Stop::Checker(Halt::Breach(b)) => format!(
-                "halted at step {}: {} is certainly violated",
-                b.step,
-                b.claim.name()
-            ),
+            Stop::Checker(Halt::Breach(b)) => {
+                format!("halted at step {}: {} is certainly violated", b.step, b.claim.name())
+            }
             Stop::Checker(Halt::InvalidState(m)) => format!("halted: {m}"),
             Stop::Singular { step, message } => format!("halted at step {step}: {message}"),
         });
-        let passed = halted.is_none()
-            && claims.iter().all(|c| c.verdict.is_pass())
-            && r.predictions.iter().all(|p| p.agrees);
+        let passed =
+            halted.is_none() && claims.iter().all(|c| c.verdict.is_pass()) && r.predictions.iter().all(|p| p.agrees);
         let atom_steps = r.steps as f64 * scene.model.bodies.len() as f64;
         Summary {
             file: file.to_string(),
@@ -110,41 +95,18 @@ impl Summary {
 
     pub fn text(&self) -> String {
         let mut s = String::new();
-        let desc = self
-            .description
-            .as_deref()
-            .map(|d| format!(" — {d}"))
-            .unwrap_or_default();
+        let desc = self.description.as_deref().map(|d| format!(" — {d}")).unwrap_or_default();
         let _ = writeln!(s, "scene       {}{desc}", self.scene);
         let terms: Vec<String> = self
             .terms
             .iter()
-            .map(|t| {
-                format!(
-                    "{} ×{}{}",
-                    t.kind,
-                    t.count,
-                    if t.dissipative { " (dissipative)" } else { "" }
-                )
-            })
+            .map(|t| format!("{} ×{}{}", t.kind, t.count, if t.dissipative { " (dissipative)" } else { "" }))
             .collect();
-        let terms = if terms.is_empty() {
-            "none (free particles)".to_string()
-        } else {
-            terms.join(", ")
-        };
+        let terms = if terms.is_empty() { "none (free particles)".to_string() } else { terms.join(", ") };
         let _ = writeln!(s, "bodies      {}", self.bodies);
         let _ = writeln!(s, "terms       {terms}");
-        let _ = writeln!(
-            s,
-            "integrator  {}, dt {}, {} steps",
-            self.integrator, self.dt, self.steps
-        );
-        let _ = writeln!(
-            s,
-            "wall        {:.3} s ({:.0} steps/s)",
-            self.wall_s, self.steps_per_s
-        );
+        let _ = writeln!(s, "integrator  {}, dt {}, {} steps", self.integrator, self.dt, self.steps);
+        let _ = writeln!(s, "wall        {:.3} s ({:.0} steps/s)", self.wall_s, self.steps_per_s);
         for c in &self.claims {
             let _ = writeln!(s, "{}", c.line);
         }

@@ -53,13 +53,7 @@ pub fn main(a: Args) -> ExitCode {
         Ok(f) => f.map(BufWriter::new),
         Err(e) => return bad(format!("cannot create the trace file: {e}")),
     };
-    let result = run(
-        &scene,
-        Options {
-            steps: a.steps,
-            trace: trace.as_mut().map(|w| w as &mut dyn Write),
-        },
-    );
+    let result = run(&scene, Options { steps: a.steps, trace: trace.as_mut().map(|w| w as &mut dyn Write) });
     let flushed = trace.map(|mut t| t.flush()).transpose();
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,
@@ -73,10 +67,7 @@ pub fn main(a: Args) -> ExitCode {
         }
     }
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&summary).expect("the summary is plain data")
-        );
+        println!("{}", serde_json::to_string_pretty(&summary).expect("the summary is plain data"));
     } else {
         print!("{}", summary.text());
     }

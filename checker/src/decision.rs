@@ -82,32 +82,16 @@ pub struct Judge {
 
 impl Judge {
     pub fn new(claim: ClaimKind) -> Self {
-        Judge {
-            claim,
-            checkpoints: 0,
-            bound: 0.0,
-            tol: 0.0,
-            undecided: None,
-        }
+        Judge { claim, checkpoints: 0, bound: 0.0, tol: 0.0, undecided: None }
     }
 
     /// Admits one checkpoint. `deviation` encloses a non-negative quantity that must be ≤ `tol`.
     pub fn admit(&mut self, step: u64, deviation: Interval, tol: f64) -> Result<(), Breach> {
         self.checkpoints += 1;
-        let breach = Breach {
-            claim: self.claim,
-            step,
-            lower: deviation.inf(),
-            upper: deviation.sup(),
-            tol,
-        };
+        let breach = Breach { claim: self.claim, step, lower: deviation.inf(), upper: deviation.sup(), tol };
         // An empty enclosure means the evaluation itself went wrong: never a PASS.
         if deviation.is_empty() || !tol.is_finite() || !(tol >= 0.0) {
-            self.undecided.get_or_insert(Breach {
-                lower: f64::NAN,
-                upper: f64::NAN,
-                ..breach
-            });
+            self.undecided.get_or_insert(Breach { lower: f64::NAN, upper: f64::NAN, ..breach });
         } else if breach.lower > tol {
             return Err(breach);
         } else if !(breach.upper <= tol) {
@@ -142,12 +126,7 @@ impl Judge {
 /// A claim about the model alone: it passes with zero deviation or is refuted with a reason.
 pub fn decide_static(claim: ClaimKind, holds: Result<(), String>) -> Verdict {
     match holds {
-        Ok(()) => Verdict::Pass(Pass {
-            claim,
-            bound: 0.0,
-            tol: 0.0,
-            checkpoints: 0,
-        }),
+        Ok(()) => Verdict::Pass(Pass { claim, bound: 0.0, tol: 0.0, checkpoints: 0 }),
         Err(reason) => Verdict::Refuted { claim, reason },
     }
 }
@@ -165,9 +144,7 @@ mod tests {
         let mut j = Judge::new(ClaimKind::EnergyConservation);
         j.admit(1, iv(0.0, 1e-7), 1e-5).unwrap();
         j.admit(2, iv(1e-7, 3e-7), 1e-5).unwrap();
-        let Verdict::Pass(p) = j.finish() else {
-            panic!("expected PASS")
-        };
+        let Verdict::Pass(p) = j.finish() else { panic!("expected PASS") };
         assert_eq!((p.bound(), p.checkpoints()), (3e-7, 2));
     }
 
@@ -183,10 +160,7 @@ mod tests {
         let mut j = Judge::new(ClaimKind::EnergyConservation);
         j.admit(3, iv(0.5e-5, 2e-5), 1e-5).unwrap();
         j.admit(4, iv(0.0, 1e-9), 1e-5).unwrap();
-        assert!(matches!(
-            j.finish(),
-            Verdict::Undecided(Breach { step: 3, .. })
-        ));
+        assert!(matches!(j.finish(), Verdict::Undecided(Breach { step: 3, .. })));
     }
 
     #[test]
@@ -194,9 +168,7 @@ mod tests {
         let mut j = Judge::new(ClaimKind::MomentumConservation);
         j.admit(1, Interval::EMPTY, 1.0).unwrap();
         assert!(!j.finish().is_pass());
-        assert!(!Judge::new(ClaimKind::MomentumConservation)
-            .finish()
-            .is_pass());
+        assert!(!Judge::new(ClaimKind::MomentumConservation).finish().is_pass());
     }
 
     #[test]

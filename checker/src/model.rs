@@ -53,10 +53,7 @@ impl Model {
         }
         for (i, b) in self.bodies.iter().enumerate() {
             if !(b.mass.is_finite() && b.mass > 0.0) {
-                return Err(format!(
-                    "body {i}: mass must be finite and positive, got {}",
-                    b.mass
-                ));
+                return Err(format!("body {i}: mass must be finite and positive, got {}", b.mass));
             }
             if !b.charge.is_finite() {
                 return Err(format!("body {i}: charge must be finite, got {}", b.charge));
@@ -66,11 +63,7 @@ impl Model {
             let spec = t.kind.spec();
             let name = spec.name;
             if t.params.len() != spec.width() {
-                return Err(format!(
-                    "term {n} ({name}): {} parameters, expected {}",
-                    t.params.len(),
-                    spec.width()
-                ));
+                return Err(format!("term {n} ({name}): {} parameters, expected {}", t.params.len(), spec.width()));
             }
             if let Some(p) = t.params.iter().find(|p| !p.is_finite()) {
                 return Err(format!("term {n} ({name}): non-finite parameter {p}"));
@@ -80,16 +73,10 @@ impl Model {
                 Shape::Pairwise | Shape::External => t.sites.is_empty(),
             };
             if !sites_ok {
-                return Err(format!(
-                    "term {n} ({name}): wrong number of sites ({})",
-                    t.sites.len()
-                ));
+                return Err(format!("term {n} ({name}): wrong number of sites ({})", t.sites.len()));
             }
             if let Some(&s) = t.sites.iter().find(|&&s| s >= self.bodies.len()) {
-                return Err(format!(
-                    "term {n} ({name}): body {s} does not exist ({} bodies)",
-                    self.bodies.len()
-                ));
+                return Err(format!("term {n} ({name}): body {s} does not exist ({} bodies)", self.bodies.len()));
             }
         }
         Ok(())
@@ -99,21 +86,14 @@ impl Model {
     pub fn check_state(&self, s: &Snapshot) -> Result<(), String> {
         let n = self.bodies.len();
         if s.x.len() != n || s.v.len() != n {
-            return Err(format!(
-                "state has {} positions and {} velocities for {n} bodies",
-                s.x.len(),
-                s.v.len()
-            ));
+            return Err(format!("state has {} positions and {} velocities for {n} bodies", s.x.len(), s.v.len()));
         }
         if !s.t.is_finite() {
             return Err(format!("step {}: time is {}", s.step, s.t));
         }
         for (i, (x, v)) in s.x.iter().zip(s.v).enumerate() {
             if x.iter().chain(v).any(|c| !c.is_finite()) {
-                return Err(format!(
-                    "step {}: body {i} has a non-finite coordinate ({x:?}, {v:?})",
-                    s.step
-                ));
+                return Err(format!("step {}: body {i} has a non-finite coordinate ({x:?}, {v:?})", s.step));
             }
         }
         Ok(())

@@ -117,12 +117,7 @@ impl Monitor {
                 stopped: None,
             })
             .collect();
-        Ok(Monitor {
-            model,
-            tracks,
-            last_step,
-            reference: None,
-        })
+        Ok(Monitor { model, tracks, last_step, reference: None })
     }
 
     /// Checks the claims due at this state. The first state handed in is the reference.
@@ -134,10 +129,7 @@ impl Monitor {
         }
         if let Err(e) = self.model.check_state(s) {
             for t in self.tracks.iter_mut().filter(|t| t.claim.kind.is_dynamic()) {
-                t.stopped = Some(Verdict::Refuted {
-                    claim: t.claim.kind,
-                    reason: e.clone(),
-                });
+                t.stopped = Some(Verdict::Refuted { claim: t.claim.kind, reason: e.clone() });
             }
             return Err(Halt::InvalidState(e));
         }
@@ -147,25 +139,14 @@ impl Monitor {
             let power = q.dissipated_power(model);
             for t in &mut self.tracks {
                 if t.claim.kind == ClaimKind::EnergyConservation {
-                    t.ledger = Some(Ledger {
-                        t: s.t,
-                        power,
-                        dissipated: point(0.0),
-                    });
+                    t.ledger = Some(Ledger { t: s.t, power, dissipated: point(0.0) });
                 }
             }
-            self.reference = Some(Reference {
-                energy: q.energy(model),
-                momentum: q.momentum(),
-                angular: q.angular_momentum(),
-            });
+            self.reference =
+                Some(Reference { energy: q.energy(model), momentum: q.momentum(), angular: q.angular_momentum() });
             return Ok(());
         };
-        for t in self
-            .tracks
-            .iter_mut()
-            .filter(|t| due(&t.claim) && t.stopped.is_none())
-        {
+        for t in self.tracks.iter_mut().filter(|t| due(&t.claim) && t.stopped.is_none()) {
             let (deviation, tol) = match t.claim.kind {
                 ClaimKind::EnergyConservation => {
                     let h = q.energy(model);
@@ -179,10 +160,7 @@ impl Monitor {
                         }
                         None => h,
                     };
-                    (
-                        (balance - r.energy).abs() / r.energy.abs(),
-                        t.claim.tol.unwrap_or(f64::NAN),
-                    )
+                    ((balance - r.energy).abs() / r.energy.abs(), t.claim.tol.unwrap_or(f64::NAN))
                 }
                 ClaimKind::MomentumConservation => {
                     t.scale = t.scale.max(weighted_speed(model, s, |_| point(1.0)));
@@ -194,10 +172,7 @@ impl Monitor {
                 }
                 ClaimKind::DimensionalConsistency => continue,
             };
-            t.marks.push(Mark {
-                step: s.step,
-                deviation,
-            });
+            t.marks.push(Mark { step: s.step, deviation });
             if let Err(b) = t.judge.admit(s.step, deviation, tol) {
                 t.stopped = Some(Verdict::Fail(b.clone()));
                 return Err(Halt::Breach(b));
@@ -213,12 +188,7 @@ impl Monitor {
         let mut trails = vec![];
         for t in self.tracks {
             if t.ledger.as_ref().is_some_and(|l| l.dissipated.sup() > 0.0) {
-                dissipators = model
-                    .terms
-                    .iter()
-                    .map(|t| t.kind)
-                    .filter(|k| k.dissipative())
-                    .collect();
+                dissipators = model.terms.iter().map(|t| t.kind).filter(|k| k.dissipative()).collect();
                 dissipators.dedup();
             }
             verdicts.push(match (t.stopped, t.claim.kind) {
@@ -228,32 +198,20 @@ impl Monitor {
                 }
                 (None, _) => t.judge.finish(),
             });
-            trails.push(Trail {
-                claim: t.claim.kind,
-                marks: t.marks,
-            });
+            trails.push(Trail { claim: t.claim.kind, marks: t.marks });
         }
-        Outcome {
-            verdicts,
-            trails,
-            dissipators,
-        }
+        Outcome { verdicts, trails, dissipators }
     }
 }
 
 /// Every term kind in the model has a homogeneous, energy-valued definition.
 fn dimensions(model: &Model) -> Result<(), String> {
-    model
-        .terms
-        .iter()
-        .try_for_each(|t| t.kind.check_dimensions())
+    model.terms.iter().try_for_each(|t| t.kind.check_dimensions())
 }
 
 /// max over components of |a − b|.
 fn worst(a: [Interval; 3], b: [Interval; 3]) -> Interval {
-    (0..3)
-        .map(|c| (a[c] - b[c]).abs())
-        .fold(point(0.0), |m, d| m.max(d))
+    (0..3).map(|c| (a[c] - b[c]).abs()).fold(point(0.0), |m, d| m.max(d))
 }
 
 /// Upper bound of Σ m·w(x)·|v|₁, the scale that round-off in Σmv (w = 1) or Σm x×v (w = |x|₁)
@@ -274,7 +232,5 @@ fn norm1(a: &[f64; 3]) -> Interval {
 
 /// The declared tolerance, or the round-off budget after `step` steps.
 fn budget(t: &Track, step: u64) -> f64 {
-    t.claim
-        .tol
-        .unwrap_or(ROUNDOFF_BUDGET * step.max(1) as f64 * t.scale)
+    t.claim.tol.unwrap_or(ROUNDOFF_BUDGET * step.max(1) as f64 * t.scale)
 }

@@ -19,23 +19,10 @@ impl<R: Real> Lifted<R> {
             .bodies
             .iter()
             .zip(s.x.iter().zip(s.v))
-            .map(|(b, (x, v))| Site {
-                x: lift3(x),
-                v: lift3(v),
-                m: proto.lift(b.mass),
-                q: proto.lift(b.charge),
-            })
+            .map(|(b, (x, v))| Site { x: lift3(x), v: lift3(v), m: proto.lift(b.mass), q: proto.lift(b.charge) })
             .collect();
-        let params = model
-            .terms
-            .iter()
-            .map(|t| t.params.iter().map(|&c| proto.lift(c)).collect())
-            .collect();
-        Lifted {
-            sites,
-            params,
-            zero: proto.lift(0.0),
-        }
+        let params = model.terms.iter().map(|t| t.params.iter().map(|&c| proto.lift(c)).collect()).collect();
+        Lifted { sites, params, zero: proto.lift(0.0) }
     }
 
     /// Calls `f` with the sites of every instance of every term, in a fixed order.
@@ -58,16 +45,12 @@ impl<R: Real> Lifted<R> {
 
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
-        self.sites.iter().fold(self.zero.clone(), |acc, s| {
-            acc + half.clone() * s.m.clone() * norm2(&s.v)
-        })
+        self.sites.iter().fold(self.zero.clone(), |acc, s| acc + half.clone() * s.m.clone() * norm2(&s.v))
     }
 
     pub fn potential(&self, model: &Model) -> R {
         let mut v = self.zero.clone();
-        self.each_instance(model, |n, s| {
-            v = v.clone() + model.terms[n].kind.potential(&self.params[n], s)
-        });
+        self.each_instance(model, |n, s| v = v.clone() + model.terms[n].kind.potential(&self.params[n], s));
         v
     }
 
@@ -88,19 +71,14 @@ impl<R: Real> Lifted<R> {
     }
 
     pub fn momentum(&self) -> Vec3<R> {
-        std::array::from_fn(|c| {
-            self.sites.iter().fold(self.zero.clone(), |acc, s| {
-                acc + s.m.clone() * s.v[c].clone()
-            })
-        })
+        std::array::from_fn(|c| self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone()))
     }
 
     pub fn angular_momentum(&self) -> Vec3<R> {
         std::array::from_fn(|c| {
             let (a, b) = ((c + 1) % 3, (c + 2) % 3);
             self.sites.iter().fold(self.zero.clone(), |acc, s| {
-                acc + s.m.clone()
-                    * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
+                acc + s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
             })
         })
     }
@@ -119,35 +97,14 @@ mod tests {
         Model {
             units: UnitSystem::Reduced,
             bodies: vec![
-                Body {
-                    mass: 1.0,
-                    charge: 0.0,
-                },
-                Body {
-                    mass: 2.5,
-                    charge: 0.0,
-                },
-                Body {
-                    mass: 0.5,
-                    charge: 0.0,
-                },
+                Body { mass: 1.0, charge: 0.0 },
+                Body { mass: 2.5, charge: 0.0 },
+                Body { mass: 0.5, charge: 0.0 },
             ],
             terms: vec![
-                TermInstance {
-                    kind: Kind::HarmonicBond,
-                    sites: vec![0, 1],
-                    params: vec![k, r0, gamma],
-                },
-                TermInstance {
-                    kind: Kind::UniformAcceleration,
-                    sites: vec![],
-                    params: vec![0.0, -g, 0.0],
-                },
-                TermInstance {
-                    kind: Kind::Gravity,
-                    sites: vec![],
-                    params: vec![0.7],
-                },
+                TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![k, r0, gamma] },
+                TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -g, 0.0] },
+                TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.7] },
             ],
         }
     }
@@ -184,27 +141,8 @@ mod tests {
         let m = model(2.0, 2.0, 0.0, 0.0);
         let x = [[-1.35, 0.0, 0.0], [1.35, 0.0, 0.0], [0.0, 100.0, 0.0]];
         let v = [[0.0; 3]; 3];
-        let s = Snapshot {
-            step: 0,
-            t: 0.0,
-            x: &x,
-            v: &v,
-        };
-        let l = Lifted::new(
-            &Model {
-                terms: m.terms[..1].to_vec(),
-                ..m.clone()
-            },
-            &s,
-            &0.0f64,
-        );
-        assert!(
-            (l.potential(&Model {
-                terms: m.terms[..1].to_vec(),
-                ..m
-            }) - 0.49)
-                .abs()
-                < 1e-15
-        );
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
+        let l = Lifted::new(&Model { terms: m.terms[..1].to_vec(), ..m.clone() }, &s, &0.0f64);
+        assert!((l.potential(&Model { terms: m.terms[..1].to_vec(), ..m }) - 0.49).abs() < 1e-15);
     }
 }

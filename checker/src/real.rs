@@ -11,12 +11,7 @@ use rug::Float;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 pub trait Real:
-    Clone
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
+    Clone + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     /// The exact binary64 value `c` as a constant of the same kind (and precision) as `self`.
     fn lift(&self, c: f64) -> Self;
@@ -70,11 +65,7 @@ impl Real for Float {
 pub type Vec3<R> = [R; 3];
 
 pub fn sub3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
-    [
-        a[0].clone() - b[0].clone(),
-        a[1].clone() - b[1].clone(),
-        a[2].clone() - b[2].clone(),
-    ]
+    [a[0].clone() - b[0].clone(), a[1].clone() - b[1].clone(), a[2].clone() - b[2].clone()]
 }
 
 pub fn dot3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {

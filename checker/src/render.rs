@@ -28,11 +28,7 @@ pub fn up(x: f64) -> String {
             (m, e) = (m / 10.0, e + 1);
         }
     }
-    format!(
-        "{m:.1}e{}{:02}",
-        if e < 0 { '-' } else { '+' },
-        e.unsigned_abs()
-    )
+    format!("{m:.1}e{}{:02}", if e < 0 { '-' } else { '+' }, e.unsigned_abs())
 }
 
 /// The quantity a claim bounds, as printed: e.g. `|ΔH|/|H₀|`.
@@ -58,11 +54,7 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             format!("round-off budget {}", up(t))
         }
     };
-    let via = if balance.is_empty() {
-        String::new()
-    } else {
-        format!(", Q dissipated by {}", balance.join(", "))
-    };
+    let via = if balance.is_empty() { String::new() } else { format!(", Q dissipated by {}", balance.join(", ")) };
     match v {
         Verdict::Pass(p) if p.claim() == ClaimKind::DimensionalConsistency => {
             format!("{name} PASS  every term is homogeneous and energy-valued")
@@ -73,18 +65,11 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             p.checkpoints(),
             tol(p.tol())
         ),
-        Verdict::Fail(b) => format!(
-            "{name} FAIL  at step {}: {q} ∈ [{}, {}] > {}{via}",
-            b.step,
-            sci(b.lower),
-            up(b.upper),
-            tol(b.tol)
-        ),
+        Verdict::Fail(b) => {
+            format!("{name} FAIL  at step {}: {q} ∈ [{}, {}] > {}{via}", b.step, sci(b.lower), up(b.upper), tol(b.tol))
+        }
         Verdict::Undecided(b) if b.lower.is_nan() => {
-            format!(
-                "{name} UNDECIDED  at step {}: the quantity could not be enclosed",
-                b.step
-            )
+            format!("{name} UNDECIDED  at step {}: the quantity could not be enclosed", b.step)
         }
         Verdict::Undecided(b) => format!(
             "{name} UNDECIDED  at step {}: {q} ∈ [{}, {}] straddles {}{via}",

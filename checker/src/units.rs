@@ -96,13 +96,7 @@ impl Dimension {
         Dimension(self.0.and_then(|a| o.0.and_then(|b| f(a, b))))
     }
     fn same(self, o: Self, op: &str) -> Self {
-        self.zip(o, |a, b| {
-            if a == b {
-                Ok(a)
-            } else {
-                Err(format!("{op} of {a} and {b}"))
-            }
-        })
+        self.zip(o, |a, b| if a == b { Ok(a) } else { Err(format!("{op} of {a} and {b}")) })
     }
 }
 

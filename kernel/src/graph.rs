@@ -21,10 +21,7 @@ impl LagrangianGraph {
                 groups.push((kind, group(kind, &instances, model)));
             }
         }
-        LagrangianGraph {
-            masses: model.bodies.iter().map(|b| b.mass).collect(),
-            groups,
-        }
+        LagrangianGraph { masses: model.bodies.iter().map(|b| b.mass).collect(), groups }
     }
 
     /// The kinds present, in dispatch order.
@@ -40,11 +37,7 @@ impl LagrangianGraph {
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
-        let frame = Frame {
-            x: &s.x,
-            v: &s.v,
-            m: &self.masses,
-        };
+        let frame = Frame { x: &s.x, v: &s.v, m: &self.masses };
         let mut potential = 0.0;
         for (_, g) in &self.groups {
             potential += g.accumulate(&frame, f)?;

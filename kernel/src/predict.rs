@@ -26,10 +26,7 @@ pub struct Prediction {
 }
 
 impl PredictionKind {
-    pub const ALL: [PredictionKind; 2] = [
-        PredictionKind::OscillatorPeriod,
-        PredictionKind::KeplerPeriod,
-    ];
+    pub const ALL: [PredictionKind; 2] = [PredictionKind::OscillatorPeriod, PredictionKind::KeplerPeriod];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -46,10 +43,7 @@ impl PredictionKind {
     pub fn predict(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<f64, String> {
         let kinds: Vec<Kind> = model.terms.iter().map(|t| t.kind).collect();
         let rel = |i: usize, j: usize| {
-            (
-                Vector3::from(x0[j]) - Vector3::from(x0[i]),
-                Vector3::from(v0[j]) - Vector3::from(v0[i]),
-            )
+            (Vector3::from(x0[j]) - Vector3::from(x0[i]), Vector3::from(v0[j]) - Vector3::from(v0[i]))
         };
         match self {
             PredictionKind::OscillatorPeriod => {
@@ -92,23 +86,9 @@ impl PredictionKind {
 /// Measures a period along the trajectory.
 pub enum Meter {
     /// Upward zero crossings of the bond extension |r| − r₀.
-    Crossings {
-        i: usize,
-        j: usize,
-        r0: f64,
-        last: Option<(f64, f64)>,
-        first: Option<f64>,
-        latest: f64,
-        count: u64,
-    },
+    Crossings { i: usize, j: usize, r0: f64, last: Option<(f64, f64)>, first: Option<f64>, latest: f64, count: u64 },
     /// Completed revolutions of the relative position in the orbital plane.
-    Revolutions {
-        basis: Option<(Vector3<f64>, Vector3<f64>)>,
-        angle: f64,
-        last: (f64, f64),
-        turns: u64,
-        at: f64,
-    },
+    Revolutions { basis: Option<(Vector3<f64>, Vector3<f64>)>, angle: f64, last: (f64, f64), turns: u64, at: f64 },
 }
 
 impl Meter {
@@ -126,27 +106,15 @@ impl Meter {
                     count: 0,
                 }
             }
-            PredictionKind::KeplerPeriod => Meter::Revolutions {
-                basis: None,
-                angle: 0.0,
-                last: (0.0, 0.0),
-                turns: 0,
-                at: 0.0,
-            },
+            PredictionKind::KeplerPeriod => {
+                Meter::Revolutions { basis: None, angle: 0.0, last: (0.0, 0.0), turns: 0, at: 0.0 }
+            }
         }
     }
 
     pub fn observe(&mut self, t: f64, x: &[[f64; 3]], v: &[[f64; 3]]) {
         match self {
-            Meter::Crossings {
-                i,
-                j,
-                r0,
-                last,
-                first,
-                latest,
-                count,
-            } => {
+            Meter::Crossings { i, j, r0, last, first, latest, count } => {
                 let s = (Vector3::from(x[*j]) - Vector3::from(x[*i])).norm() - *r0;
                 if let Some((t0, s0)) = *last {
                     if s0 < 0.0 && s >= 0.0 {
@@ -158,13 +126,7 @@ impl Meter {
                 }
                 *last = Some((t, s));
             }
-            Meter::Revolutions {
-                basis,
-                angle,
-                last,
-                turns,
-                at,
-            } => {
+            Meter::Revolutions { basis, angle, last, turns, at } => {
                 let r = Vector3::from(x[1]) - Vector3::from(x[0]);
                 let (e1, e2) = *basis.get_or_insert_with(|| {
                     let n = r.cross(&(Vector3::from(v[1]) - Vector3::from(v[0])));
@@ -191,12 +153,9 @@ impl Meter {
     /// The measured period, once enough of the trajectory has been seen.
     pub fn measured(&self) -> Option<f64> {
         match self {
-            Meter::Crossings {
-                first,
-                latest,
-                count,
-                ..
-            } if *count >= 2 => Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64),
+            Meter::Crossings { first, latest, count, .. } if *count >= 2 => {
+                Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64)
+            }
             Meter::Revolutions { turns, at, .. } if *turns >= 1 => Some(at / *turns as f64),
             _ => None,
         }

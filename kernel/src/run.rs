@@ -63,61 +63,37 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::new(&scene.model);
     let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
-    let mut state = State {
-        step: 0,
-        t: 0.0,
-        x: scene.x0.clone(),
-        v: scene.v0.clone(),
-    };
-    let mut meters: Vec<(Meter, &Prediction)> = scene
-        .predictions
-        .iter()
-        .map(|p| (Meter::new(p, &scene.model), p))
-        .collect();
+    let mut state = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
+    let mut meters: Vec<(Meter, &Prediction)> =
+        scene.predictions.iter().map(|p| (Meter::new(p, &scene.model), p)).collect();
 
     let start = Instant::now();
     let mut stop = None;
     let mut trace = |s: &State, potential: f64| -> Result<(), String> {
         if let Some(w) = opts.trace.as_mut() {
-            let line = TraceLine {
-                step: s.step,
-                t: s.t,
-                energy: s.kinetic(&graph.masses) + potential,
-                x: &s.x,
-                v: &s.v,
-            };
+            let line =
+                TraceLine { step: s.step, t: s.t, energy: s.kinetic(&graph.masses) + potential, x: &s.x, v: &s.v };
             serde_json::to_writer(&mut *w, &line).map_err(|e| e.to_string())?;
             writeln!(w).map_err(|e| format!("writing the trace: {e}"))?;
         }
         Ok(())
     };
     match VelocityVerlet::new(&graph, &state) {
-        Err(e) => {
-            stop = Some(Stop::Singular {
-                step: 0,
-                message: e.to_string(),
-            })
-        }
+        Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
         Ok(mut solver) => {
             if let Err(h) = monitor.observe(&state.snapshot()) {
                 stop = Some(Stop::Checker(h));
             }
-            meters
-                .iter_mut()
-                .for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
             trace(&state, solver.potential)?;
             while stop.is_none() && state.step < steps {
                 if let Err(e) = solver.step(&graph, &mut state, dt) {
-                    stop = Some(Stop::Singular {
-                        step: state.step + 1,
-                        message: e.to_string(),
-                    });
+                    stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
                     break;
                 }
                 if !solver.potential.is_finite() {
                     if let Some(b) = state.non_finite() {
-                        let msg =
-                            format!("step {}: body {b} has a non-finite coordinate", state.step);
+                        let msg = format!("step {}: body {b} has a non-finite coordinate", state.step);
                         stop = Some(Stop::Checker(Halt::InvalidState(msg)));
                         break;
                     }
@@ -125,9 +101,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 if let Err(h) = monitor.observe(&state.snapshot()) {
                     stop = Some(Stop::Checker(h));
                 }
-                meters
-                    .iter_mut()
-                    .for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
                 if state.step % scene.solver.steps_per_frame == 0 || state.step == steps {
                     trace(&state, solver.potential)?;
                 }
@@ -149,22 +123,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             let measured = m.measured();
             let rel_diff = measured.map(|t| (t - p.predicted).abs() / p.predicted);
             let agrees = rel_diff.is_some_and(|d| p.tol.is_none_or(|tol| d <= tol));
-            Measured {
-                name: p.kind.name(),
-                predicted: p.predicted,
-                measured,
-                rel_diff,
-                tol: p.tol,
-                agrees,
-            }
+            Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees }
         })
         .collect();
-    Ok(Report {
-        steps: state.step,
-        wall_s,
-        stop,
-        outcome: monitor.finish(),
-        predictions,
-        state,
-    })
+    Ok(Report { steps: state.step, wall_s, stop, outcome: monitor.finish(), predictions, state })
 }

@@ -48,26 +48,13 @@ pub struct Param {
 
 impl Param {
     pub const fn scalar(name: &'static str, dim: Dim) -> Param {
-        Param {
-            name,
-            dim,
-            len: 1,
-            default: None,
-        }
+        Param { name, dim, len: 1, default: None }
     }
     pub const fn vector(name: &'static str, dim: Dim) -> Param {
-        Param {
-            name,
-            dim,
-            len: 3,
-            default: None,
-        }
+        Param { name, dim, len: 3, default: None }
     }
     pub const fn or(self, default: f64) -> Param {
-        Param {
-            default: Some(default),
-            ..self
-        }
+        Param { default: Some(default), ..self }
     }
 }
 
@@ -139,11 +126,8 @@ impl Kind {
     /// sites carry L, L·T⁻¹, M, Q. Returns (potential, dissipation function).
     fn dimensions(self) -> (Dimension, Option<Dimension>) {
         let spec = self.spec();
-        let p: Vec<Dimension> = spec
-            .params
-            .iter()
-            .flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len))
-            .collect();
+        let p: Vec<Dimension> =
+            spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
         let site = Site {
             x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
             v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
@@ -165,10 +149,7 @@ impl Kind {
         let (v, f) = self.dimensions();
         let expect = |what: &str, got: Dimension, want: Dim| match got.0 {
             Ok(d) if d == want => Ok(()),
-            Ok(d) => Err(format!(
-                "{}: {what} has dimension {d}, not {want}",
-                self.name()
-            )),
+            Ok(d) => Err(format!("{}: {what} has dimension {d}, not {want}", self.name())),
             Err(e) => Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
         };
         expect("potential", v, Dim::ENERGY)?;
@@ -180,10 +161,7 @@ impl Kind {
 
     /// The term selected by `keyword` among the terms whose shape satisfies `fits`.
     pub fn lookup(keyword: &str, fits: impl Fn(Shape) -> bool) -> Option<Kind> {
-        Kind::ALL
-            .iter()
-            .copied()
-            .find(|k| k.spec().keyword == keyword && fits(k.spec().shape))
+        Kind::ALL.iter().copied().find(|k| k.spec().keyword == keyword && fits(k.spec().shape))
     }
 }
 

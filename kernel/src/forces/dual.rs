@@ -16,46 +16,31 @@ pub struct Dual {
 impl Add for Dual {
     type Output = Dual;
     fn add(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v + o.v,
-            d: self.d + o.d,
-        }
+        Dual { v: self.v + o.v, d: self.d + o.d }
     }
 }
 impl Sub for Dual {
     type Output = Dual;
     fn sub(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v - o.v,
-            d: self.d - o.d,
-        }
+        Dual { v: self.v - o.v, d: self.d - o.d }
     }
 }
 impl Mul for Dual {
     type Output = Dual;
     fn mul(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v * o.v,
-            d: self.d * o.v + self.v * o.d,
-        }
+        Dual { v: self.v * o.v, d: self.d * o.v + self.v * o.d }
     }
 }
 impl Div for Dual {
     type Output = Dual;
     fn div(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v / o.v,
-            d: (self.d * o.v - self.v * o.d) / (o.v * o.v),
-        }
+        Dual { v: self.v / o.v, d: (self.d * o.v - self.v * o.d) / (o.v * o.v) }
     }
 }
 impl Neg for Dual {
     type Output = Dual;
     fn neg(self) -> Dual {
-        Dual {
-            v: -self.v,
-            d: -self.d,
-        }
+        Dual { v: -self.v, d: -self.d }
     }
 }
 impl Real for Dual {
@@ -64,16 +49,10 @@ impl Real for Dual {
     }
     fn sqrt(self) -> Self {
         let s = self.v.sqrt();
-        Dual {
-            v: s,
-            d: self.d / (2.0 * s),
-        }
+        Dual { v: s, d: self.d / (2.0 * s) }
     }
     fn powi(self, n: i32) -> Self {
-        Dual {
-            v: self.v.powi(n),
-            d: n as f64 * self.v.powi(n - 1) * self.d,
-        }
+        Dual { v: self.v.powi(n), d: n as f64 * self.v.powi(n - 1) * self.d }
     }
 }
 
@@ -99,27 +78,15 @@ impl Rng {
 pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64) {
     let mut rng = Rng::new(seed);
     let n = kind.spec().shape.arity();
-    let mut x: Vec<[f64; 3]> = (0..n)
-        .map(|_| std::array::from_fn(|_| rng.uniform(-3.0, 3.0)))
-        .collect();
-    let v: Vec<[f64; 3]> = (0..n)
-        .map(|_| std::array::from_fn(|_| rng.uniform(-2.0, 2.0)))
-        .collect();
+    let mut x: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-3.0, 3.0))).collect();
+    let v: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-2.0, 2.0))).collect();
     let m: Vec<f64> = (0..n).map(|_| rng.uniform(0.5, 3.0)).collect();
     if sep < 1.0 && n == 2 {
         let dir: [f64; 3] = std::array::from_fn(|_| rng.uniform(-1.0, 1.0));
         x[1] = std::array::from_fn(|c| x[0][c] + sep * dir[c]);
     }
-    let sites = if matches!(kind.spec().shape, Shape::Bond(_)) {
-        (0..n).collect()
-    } else {
-        vec![]
-    };
-    let term = TermInstance {
-        kind,
-        sites,
-        params: params.to_vec(),
-    };
+    let sites = if matches!(kind.spec().shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
+    let term = TermInstance { kind, sites, params: params.to_vec() };
     let model = Model {
         units: UnitSystem::Reduced,
         bodies: m.iter().map(|&mass| Body { mass, charge: 0.0 }).collect(),
@@ -127,16 +94,8 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     };
 
     let mut fast = vec![[0.0; 3]; n];
-    let energy = group(kind, &[&term], &model)
-        .accumulate(
-            &Frame {
-                x: &x,
-                v: &v,
-                m: &m,
-            },
-            &mut fast,
-        )
-        .expect("no singularity");
+    let energy =
+        group(kind, &[&term], &model).accumulate(&Frame { x: &x, v: &v, m: &m }, &mut fast).expect("no singularity");
 
     // The definition at a state where coordinate (b, c) of x (or v) carries the derivative.
     let eval = |b: usize, c: usize, of_velocity: bool| -> (Dual, Option<Dual>) {
@@ -150,14 +109,8 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
                     }
                 };
                 Site {
-                    x: std::array::from_fn(|k| Dual {
-                        v: x[i][k],
-                        d: seed(k, false),
-                    }),
-                    v: std::array::from_fn(|k| Dual {
-                        v: v[i][k],
-                        d: seed(k, true),
-                    }),
+                    x: std::array::from_fn(|k| Dual { v: x[i][k], d: seed(k, false) }),
+                    v: std::array::from_fn(|k| Dual { v: v[i][k], d: seed(k, true) }),
                     m: Dual { v: m[i], d: 0.0 },
                     q: Dual { v: 0.0, d: 0.0 },
                 }
@@ -168,11 +121,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         (kind.potential(&p, &s), kind.rayleigh(&p, &s))
     };
     let exact: Vec<[f64; 3]> = (0..n)
-        .map(|b| {
-            std::array::from_fn(|c| {
-                -eval(b, c, false).0.d - eval(b, c, true).1.map_or(0.0, |f| f.d)
-            })
-        })
+        .map(|b| std::array::from_fn(|c| -eval(b, c, false).0.d - eval(b, c, true).1.map_or(0.0, |f| f.d)))
         .collect();
     let scale = exact.iter().flatten().fold(0.0f64, |a, f| a.max(f.abs()));
     for (b, (fa, fe)) in fast.iter().zip(&exact).enumerate() {

@@ -15,10 +15,7 @@ impl PairGravity {
         let g: f64 = t.iter().map(|t| t.params[0]).sum();
         let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
         let n = m.len();
-        let strength = (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .map(|(i, j)| g * m[i] * m[j])
-            .collect();
+        let strength = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).map(|(i, j)| g * m[i] * m[j]).collect();
         PairGravity { strength, n }
     }
 }
@@ -32,11 +29,7 @@ impl Force for PairGravity {
                 let d = Vector3::from(s.x[j]) - Vector3::from(s.x[i]);
                 let r2 = d.norm_squared();
                 if r2 == 0.0 {
-                    return Err(Singularity {
-                        term: "Gravity",
-                        i,
-                        j,
-                    });
+                    return Err(Singularity { term: "Gravity", i, j });
                 }
                 let r = r2.sqrt();
                 let gmm = self.strength[p];

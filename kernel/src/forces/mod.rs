@@ -22,11 +22,7 @@ pub struct Singularity {
 
 impl fmt::Display for Singularity {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{}: bodies {} and {} are at the same point, where the force is undefined",
-            self.term, self.i, self.j
-        )
+        write!(f, "{}: bodies {} and {} are at the same point, where the force is undefined", self.term, self.i, self.j)
     }
 }
 

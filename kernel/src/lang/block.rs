@@ -24,30 +24,17 @@ impl<'a> Block<'a> {
     /// Reads an optional `block` pair; a missing block is an empty one at `at`.
     pub fn read(pair: Option<Pair<'a>>, at: Span) -> Result<Self, Diagnostic> {
         let Some(pair) = pair else {
-            return Ok(Block {
-                span: at,
-                fields: vec![],
-            });
+            return Ok(Block { span: at, fields: vec![] });
         };
         let span = pair.as_span().into();
         let mut fields: Vec<Field> = vec![];
         for f in pair.into_inner() {
             let mut parts = f.into_inner();
-            let (name, value) = (
-                parts.next().expect("field name"),
-                parts.next().expect("field value"),
-            );
+            let (name, value) = (parts.next().expect("field name"), parts.next().expect("field value"));
             if fields.iter().any(|g| g.name == name.as_str()) {
-                return Err(Diagnostic::new(
-                    name.as_span().into(),
-                    format!("duplicate field `{}`", name.as_str()),
-                ));
+                return Err(Diagnostic::new(name.as_span().into(), format!("duplicate field `{}`", name.as_str())));
             }
-            fields.push(Field {
-                name: name.as_str(),
-                span: name.as_span().into(),
-                value,
-            });
+            fields.push(Field { name: name.as_str(), span: name.as_span().into(), value });
         }
         Ok(Block { span, fields })
     }
@@ -71,10 +58,7 @@ impl<'a> Block<'a> {
                 } else {
                     format!("expected {}", allowed.join(", "))
                 };
-                Err(Diagnostic::new(
-                    f.span,
-                    format!("unknown field `{}` for {owner}; {known}", f.name),
-                ))
+                Err(Diagnostic::new(f.span, format!("unknown field `{}` for {owner}; {known}", f.name)))
             }
         }
     }
@@ -95,24 +79,9 @@ pub struct Reader {
 
 impl Reader {
     /// `len` numbers (1, or 3 for a vector) of dimension `dim`, in the scene's units.
-    pub fn numbers(
-        &self,
-        f: &Field,
-        owner: &str,
-        dim: Dim,
-        len: usize,
-    ) -> Result<Vec<f64>, Diagnostic> {
-        let what = if len == 1 {
-            "a number"
-        } else {
-            "a vector [x, y, z]"
-        };
-        let q = f
-            .value
-            .clone()
-            .into_inner()
-            .next()
-            .expect("a value has one child");
+    pub fn numbers(&self, f: &Field, owner: &str, dim: Dim, len: usize) -> Result<Vec<f64>, Diagnostic> {
+        let what = if len == 1 { "a number" } else { "a vector [x, y, z]" };
+        let q = f.value.clone().into_inner().next().expect("a value has one child");
         if q.as_rule() != Rule::quantity {
             return Err(Diagnostic::new(
                 q.as_span().into(),
@@ -126,23 +95,15 @@ impl Reader {
             _ => vec![body.clone()],
         };
         if (body.as_rule() == Rule::vector) != (len == 3) || nums.len() != len {
-            return Err(Diagnostic::new(
-                body.as_span().into(),
-                format!("{owner}.{} expects {what}", f.name),
-            ));
+            return Err(Diagnostic::new(body.as_span().into(), format!("{owner}.{} expects {what}", f.name)));
         }
-        let mut scale = 1.0;
+        let mut convert = None;
         if let Some(u) = parts.next() {
             let u = unit(u)?;
             if u.dim != dim {
                 return Err(Diagnostic::new(
                     u.span,
-                    format!(
-                        "{owner}.{} expects {}, found {}",
-                        f.name,
-                        typed(dim),
-                        typed(u.dim)
-                    ),
+                    format!("{owner}.{} expects {}, found {}", f.name, typed(dim), typed(u.dim)),
                 ));
             }
             if self.system == UnitSystem::Reduced {
@@ -151,22 +112,18 @@ impl Reader {
                     "a physical unit in a scene with reduced units; declare `units si` or write a bare number",
                 ));
             }
-            scale = u.to_si;
+            convert = Some(u);
         }
         nums.iter()
             .map(|n| {
-                let x = n
-                    .as_str()
-                    .parse::<f64>()
-                    .map(|x| x * scale)
-                    .unwrap_or(f64::NAN);
+                let x = match convert {
+                    Some(u) => u.convert(n.as_str()),
+                    None => n.as_str().parse::<f64>().unwrap_or(f64::NAN),
+                };
                 if x.is_finite() {
                     Ok(x)
                 } else {
-                    Err(Diagnostic::new(
-                        n.as_span().into(),
-                        format!("non-finite number `{}`", n.as_str()),
-                    ))
+                    Err(Diagnostic::new(n.as_span().into(), format!("non-finite number `{}`", n.as_str())))
                 }
             })
             .collect()
@@ -178,10 +135,7 @@ impl Reader {
         if x > 0.0 {
             Ok(x)
         } else {
-            Err(Diagnostic::new(
-                value_span(f),
-                format!("{owner}.{} must be positive, got {x}", f.name),
-            ))
+            Err(Diagnostic::new(value_span(f), format!("{owner}.{} must be positive, got {x}", f.name)))
         }
     }
 
@@ -191,22 +145,14 @@ impl Reader {
         if x >= 1.0 && x.fract() == 0.0 && x <= 9.007_199_254_740_992e15 {
             Ok(x as u64)
         } else {
-            Err(Diagnostic::new(
-                value_span(f),
-                format!("{owner}.{} expects a whole number ≥ 1, got {x}", f.name),
-            ))
+            Err(Diagnostic::new(value_span(f), format!("{owner}.{} expects a whole number ≥ 1, got {x}", f.name)))
         }
     }
 }
 
 /// A name or a quoted string.
 pub fn word<'a>(f: &Field<'a>, owner: &str) -> Result<(&'a str, Span), Diagnostic> {
-    let v = f
-        .value
-        .clone()
-        .into_inner()
-        .next()
-        .expect("a value has one child");
+    let v = f.value.clone().into_inner().next().expect("a value has one child");
     match v.as_rule() {
         Rule::ident => Ok((v.as_str(), v.as_span().into())),
         Rule::string => {

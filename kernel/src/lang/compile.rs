@@ -55,18 +55,11 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         system = Some(match w.as_str() {
             "reduced" => UnitSystem::Reduced,
             "si" => UnitSystem::Si,
-            other => {
-                return err(
-                    w.as_span(),
-                    format!("unknown unit system `{other}`; expected reduced or si"),
-                )
-            }
+            other => return err(w.as_span(), format!("unknown unit system `{other}`; expected reduced or si")),
         });
     }
     let mut c = Compiler {
-        rd: Reader {
-            system: system.unwrap_or(UnitSystem::Reduced),
-        },
+        rd: Reader { system: system.unwrap_or(UnitSystem::Reduced) },
         templates: HashMap::new(),
         bodies: vec![],
         x0: vec![],
@@ -102,12 +95,7 @@ impl<'a> Compiler<'a> {
                 if self.description.is_some() {
                     return err(span, "second description");
                 }
-                let s = next()
-                    .and(next())
-                    .expect("string")
-                    .into_inner()
-                    .next()
-                    .expect("body");
+                let s = next().and(next()).expect("string").into_inner().next().expect("body");
                 self.description = Some(s.as_str().to_string());
                 Ok(())
             }
@@ -115,13 +103,8 @@ impl<'a> Compiler<'a> {
                 let name = next().and(next()).expect("template name");
                 let block = Block::read(next(), span)?;
                 block.check_names(&format!("entity {}", name.as_str()), &ENTITY_FIELDS[1..])?;
-                if self.templates.contains_key(name.as_str())
-                    || BUILTIN_TYPES.iter().any(|t| t.0 == name.as_str())
-                {
-                    return err(
-                        name.as_span(),
-                        format!("entity type `{}` is defined twice", name.as_str()),
-                    );
+                if self.templates.contains_key(name.as_str()) || BUILTIN_TYPES.iter().any(|t| t.0 == name.as_str()) {
+                    return err(name.as_span(), format!("entity type `{}` is defined twice", name.as_str()));
                 }
                 self.templates.insert(name.as_str(), block);
                 Ok(())
@@ -140,63 +123,32 @@ impl<'a> Compiler<'a> {
                     .into_inner()
                     .map(|i| match i.as_str().parse::<usize>() {
                         Ok(n) => Ok((n, i.as_span().into())),
-                        Err(_) => err(
-                            i.as_span(),
-                            format!("body index `{}` is too large", i.as_str()),
-                        ),
+                        Err(_) => err(i.as_span(), format!("body index `{}` is too large", i.as_str())),
                     })
                     .collect::<Result<_, _>>()?;
                 if indices.len() != arity {
-                    return err(
-                        idx.as_span(),
-                        format!(
-                            "{} joins {arity} bodies, got {}",
-                            kind.name(),
-                            indices.len()
-                        ),
-                    );
+                    return err(idx.as_span(), format!("{} joins {arity} bodies, got {}", kind.name(), indices.len()));
                 }
                 for (n, (a, s)) in indices.iter().enumerate() {
                     if indices[..n].iter().any(|(b, _)| a == b) {
                         return err(*s, format!("{} lists body {a} twice", kind.name()));
                     }
                 }
-                let params = self.params(
-                    kind,
-                    Block::read(next(), kw.as_span().into())?,
-                    kw.as_span().into(),
-                )?;
-                self.terms.push(TermInstance {
-                    kind,
-                    sites: indices.iter().map(|i| i.0).collect(),
-                    params,
-                });
+                let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
+                self.terms.push(TermInstance { kind, sites: indices.iter().map(|i| i.0).collect(), params });
                 self.indices.push(indices);
                 Ok(())
             }
             Rule::interaction | Rule::external => {
-                let kw = if rule == Rule::interaction {
-                    next().and(next())
-                } else {
-                    next()
-                }
-                .expect("keyword");
+                let kw = if rule == Rule::interaction { next().and(next()) } else { next() }.expect("keyword");
                 let (what, shape) = if rule == Rule::interaction {
                     ("interaction", Shape::Pairwise)
                 } else {
                     ("term", Shape::External)
                 };
                 let kind = lookup(&kw, |s| s == shape, what)?;
-                let params = self.params(
-                    kind,
-                    Block::read(next(), kw.as_span().into())?,
-                    kw.as_span().into(),
-                )?;
-                self.terms.push(TermInstance {
-                    kind,
-                    sites: vec![],
-                    params,
-                });
+                let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
+                self.terms.push(TermInstance { kind, sites: vec![], params });
                 self.indices.push(vec![]);
                 Ok(())
             }
@@ -212,17 +164,10 @@ impl<'a> Compiler<'a> {
                     let known: Vec<_> = PredictionKind::ALL.iter().map(|k| k.name()).collect();
                     Diagnostic::new(
                         name.as_span().into(),
-                        format!(
-                            "unknown prediction `{}`; known: {}",
-                            name.as_str(),
-                            known.join(", ")
-                        ),
+                        format!("unknown prediction `{}`; known: {}", name.as_str(), known.join(", ")),
                     )
                 })?;
-                let tol = block
-                    .take("tol")
-                    .map(|f| self.rd.positive(&f, name.as_str(), Dim::NONE))
-                    .transpose()?;
+                let tol = block.take("tol").map(|f| self.rd.positive(&f, name.as_str(), Dim::NONE)).transpose()?;
                 block.check_names(name.as_str(), &[])?;
                 self.predictions.push((kind, tol, name.as_span().into()));
                 Ok(())
@@ -251,39 +196,25 @@ impl<'a> Compiler<'a> {
                 } else if let Some(t) = self.templates.get(name) {
                     Some(t)
                 } else {
-                    let mut known: Vec<&str> = self
-                        .templates
-                        .keys()
-                        .copied()
-                        .chain(BUILTIN_TYPES.iter().map(|t| t.0))
-                        .collect();
+                    let mut known: Vec<&str> =
+                        self.templates.keys().copied().chain(BUILTIN_TYPES.iter().map(|t| t.0)).collect();
                     known.sort();
-                    return err(
-                        at,
-                        format!(
-                            "unknown entity type `{name}`; known types: {}",
-                            known.join(", ")
-                        ),
-                    );
+                    return err(at, format!("unknown entity type `{name}`; known types: {}", known.join(", ")));
                 }
             }
         };
         b.check_names("entity", ENTITY_FIELDS)?;
         let at = b.span;
-        let mut field = |name: &str| {
-            b.take(name)
-                .or_else(|| template.and_then(|t| t.get(name).cloned()))
-        };
+        let mut field = |name: &str| b.take(name).or_else(|| template.and_then(|t| t.get(name).cloned()));
         let vec3 = |v: Vec<f64>| [v[0], v[1], v[2]];
-        let position =
-            field("position").ok_or_else(|| Diagnostic::new(at, "entity needs a position"))?;
+        let position = field("position").ok_or_else(|| Diagnostic::new(at, "entity needs a position"))?;
         let x = vec3(self.rd.numbers(&position, "entity", Dim::LENGTH, 3)?);
         let v = match field("velocity") {
             Some(f) => vec3(self.rd.numbers(&f, "entity", Dim::VELOCITY, 3)?),
             None => [0.0; 3],
         };
-        let mass = field("mass")
-            .ok_or_else(|| Diagnostic::new(at, "entity needs a mass (or a type that gives one)"))?;
+        let mass =
+            field("mass").ok_or_else(|| Diagnostic::new(at, "entity needs a mass (or a type that gives one)"))?;
         let mass = self.rd.positive(&mass, "entity", Dim::MASS)?;
         let charge = match field("charge") {
             Some(f) => self.rd.numbers(&f, "entity", Dim::CHARGE, 1)?[0],
@@ -307,12 +238,7 @@ impl<'a> Compiler<'a> {
             match (b.take(p.name), p.default) {
                 (Some(f), _) => out.extend(self.rd.numbers(&f, spec.name, p.dim, p.len)?),
                 (None, Some(d)) => out.extend(std::iter::repeat_n(d, p.len)),
-                (None, None) => {
-                    return err(
-                        at,
-                        format!("{} needs `{}` ({})", spec.name, p.name, typed(p.dim)),
-                    )
-                }
+                (None, None) => return err(at, format!("{} needs `{}` ({})", spec.name, p.name, typed(p.dim))),
             }
         }
         let names: Vec<&str> = spec.params.iter().map(|p| p.name).collect();
@@ -324,14 +250,7 @@ impl<'a> Compiler<'a> {
         let at: Span = name.as_span().into();
         let kind = ClaimKind::from_name(name.as_str()).ok_or_else(|| {
             let known: Vec<_> = ClaimKind::ALL.iter().map(|k| k.name()).collect();
-            Diagnostic::new(
-                at,
-                format!(
-                    "unknown claim `{}`; known claims: {}",
-                    name.as_str(),
-                    known.join(", ")
-                ),
-            )
+            Diagnostic::new(at, format!("unknown claim `{}`; known claims: {}", name.as_str(), known.join(", ")))
         })?;
         if self.claims.iter().any(|c| c.kind == kind) {
             return err(at, format!("{} is declared twice", kind.name()));
@@ -341,32 +260,13 @@ impl<'a> Compiler<'a> {
             _ => None,
         };
         if kind.needs_tol() && tol.is_none() {
-            return err(
-                at,
-                format!(
-                    "{} needs a tolerance: `{{ tol: 1e-5 }}` (relative)",
-                    kind.name()
-                ),
-            );
+            return err(at, format!("{} needs a tolerance: `{{ tol: 1e-5 }}` (relative)", kind.name()));
         }
-        let every = if kind.is_dynamic() {
-            b.take("every")
-                .map(|f| self.rd.count(&f, kind.name()))
-                .transpose()?
-        } else {
-            None
-        };
-        let allowed: &[&str] = if kind.is_dynamic() {
-            &["tol", "every"]
-        } else {
-            &[]
-        };
+        let every =
+            if kind.is_dynamic() { b.take("every").map(|f| self.rd.count(&f, kind.name())).transpose()? } else { None };
+        let allowed: &[&str] = if kind.is_dynamic() { &["tol", "every"] } else { &[] };
         b.check_names(kind.name(), allowed)?;
-        self.claims.push(Claim {
-            kind,
-            tol,
-            every: every.unwrap_or(1),
-        });
+        self.claims.push(Claim { kind, tol, every: every.unwrap_or(1) });
         Ok(())
     }
 
@@ -377,16 +277,11 @@ impl<'a> Compiler<'a> {
                 let (name, at) = word(&f, "solver")?;
                 Integrator::from_name(name).ok_or_else(|| {
                     let known: Vec<_> = Integrator::ALL.iter().map(|i| i.name()).collect();
-                    Diagnostic::new(
-                        at,
-                        format!("unknown integrator `{name}`; known: {}", known.join(", ")),
-                    )
+                    Diagnostic::new(at, format!("unknown integrator `{name}`; known: {}", known.join(", ")))
                 })?
             }
         };
-        let dt = b
-            .take("dt")
-            .ok_or_else(|| Diagnostic::new(b.span, "solver needs a time step `dt`"))?;
+        let dt = b.take("dt").ok_or_else(|| Diagnostic::new(b.span, "solver needs a time step `dt`"))?;
         let dt = self.rd.positive(&dt, "solver", Dim::TIME)?;
         let steps = match (b.take("steps"), b.take("duration")) {
             (Some(_), Some(d)) => return err(d.span, "give `steps` or `duration`, not both"),
@@ -394,27 +289,15 @@ impl<'a> Compiler<'a> {
             (None, Some(d)) => {
                 let n = (self.rd.positive(&d, "solver", Dim::TIME)? / dt).round();
                 if !(1.0..=9.0e15).contains(&n) {
-                    return err(
-                        value_span(&d),
-                        format!("duration / dt = {n} steps is out of range"),
-                    );
+                    return err(value_span(&d), format!("duration / dt = {n} steps is out of range"));
                 }
                 n as u64
             }
             (None, None) => DEFAULT_STEPS,
         };
-        let steps_per_frame = b
-            .take("steps_per_frame")
-            .map(|f| self.rd.count(&f, "solver"))
-            .transpose()?
-            .unwrap_or(10);
+        let steps_per_frame = b.take("steps_per_frame").map(|f| self.rd.count(&f, "solver")).transpose()?.unwrap_or(10);
         b.check_names("solver", &[])?;
-        Ok(Solver {
-            integrator,
-            dt,
-            steps,
-            steps_per_frame,
-        })
+        Ok(Solver { integrator, dt, steps, steps_per_frame })
     }
 
     fn finish(self, name: String, at: Span) -> Result<Scene, Diagnostic> {
@@ -424,36 +307,18 @@ impl<'a> Compiler<'a> {
         }
         for (i, s) in self.indices.iter().flatten() {
             if *i >= n {
-                return err(
-                    *s,
-                    format!(
-                        "body index {i} is out of range: the scene has {n} entities (0..{})",
-                        n - 1
-                    ),
-                );
+                return err(*s, format!("body index {i} is out of range: the scene has {n} entities (0..{})", n - 1));
             }
         }
-        let solver = self
-            .solver
-            .ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
-        let model = Model {
-            units: self.rd.system,
-            bodies: self.bodies,
-            terms: self.terms,
-        };
+        let solver = self.solver.ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
+        let model = Model { units: self.rd.system, bodies: self.bodies, terms: self.terms };
         let predictions = self
             .predictions
             .into_iter()
-            .map(
-                |(kind, tol, s)| match kind.predict(&model, &self.x0, &self.v0) {
-                    Ok(predicted) => Ok(Prediction {
-                        kind,
-                        tol,
-                        predicted,
-                    }),
-                    Err(why) => err(s, format!("{}: {why}", kind.name())),
-                },
-            )
+            .map(|(kind, tol, s)| match kind.predict(&model, &self.x0, &self.v0) {
+                Ok(predicted) => Ok(Prediction { kind, tol, predicted }),
+                Err(why) => err(s, format!("{}: {why}", kind.name())),
+            })
             .collect::<Result<_, _>>()?;
         Ok(Scene {
             name,
@@ -472,18 +337,7 @@ impl<'a> Compiler<'a> {
 
 fn lookup(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, what: &str) -> Result<Kind, Diagnostic> {
     Kind::lookup(kw.as_str(), fits).ok_or_else(|| {
-        let known: Vec<_> = Kind::ALL
-            .iter()
-            .filter(|k| fits(k.spec().shape))
-            .map(|k| k.spec().keyword)
-            .collect();
-        Diagnostic::new(
-            kw.as_span().into(),
-            format!(
-                "unknown {what} `{}`; known: {}",
-                kw.as_str(),
-                known.join(", ")
-            ),
-        )
+        let known: Vec<_> = Kind::ALL.iter().filter(|k| fits(k.spec().shape)).map(|k| k.spec().keyword).collect();
+        Diagnostic::new(kw.as_span().into(), format!("unknown {what} `{}`; known: {}", kw.as_str(), known.join(", ")))
     })
 }

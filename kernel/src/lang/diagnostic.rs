@@ -11,10 +11,7 @@ pub struct Span {
 
 impl From<pest::Span<'_>> for Span {
     fn from(s: pest::Span<'_>) -> Self {
-        Span {
-            start: s.start(),
-            end: s.end(),
-        }
+        Span { start: s.start(), end: s.end() }
     }
 }
 
@@ -26,10 +23,7 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn new(span: Span, message: impl Into<String>) -> Self {
-        Diagnostic {
-            span,
-            message: message.into(),
-        }
+        Diagnostic { span, message: message.into() }
     }
 
     /// 1-based line and column (in characters) of the start of the span.
@@ -45,11 +39,7 @@ impl Diagnostic {
     pub fn render(&self, file: &str, source: &str) -> Rendered {
         let (line, col) = self.line_col(source);
         let text = source.lines().nth(line - 1).unwrap_or("").to_string();
-        Rendered {
-            head: format!("{file}:{line}:{col}: {}", self.message),
-            text,
-            col,
-        }
+        Rendered { head: format!("{file}:{line}:{col}: {}", self.message), text, col }
     }
 }
 
@@ -61,12 +51,7 @@ pub struct Rendered {
 
 impl fmt::Display for Rendered {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let pad: String = self
-            .text
-            .chars()
-            .take(self.col - 1)
-            .map(|c| if c == '\t' { '\t' } else { ' ' })
-            .collect();
+        let pad: String = self.text.chars().take(self.col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
         write!(f, "{}\n  {}\n  {pad}^", self.head, self.text)
     }
 }
@@ -80,9 +65,6 @@ mod tests {
         let src = "ab\ncdé fg\n";
         let d = Diagnostic::new(Span { start: 8, end: 9 }, "x");
         assert_eq!(d.line_col(src), (2, 5));
-        assert_eq!(
-            d.render("f", src).to_string(),
-            "f:2:5: x\n  cdé fg\n      ^"
-        );
+        assert_eq!(d.render("f", src).to_string(), "f:2:5: x\n  cdé fg\n      ^");
     }
 }

@@ -43,15 +43,8 @@ pub fn diagnostic(e: Error<Rule>, source: &str) -> Diagnostic {
     let found = match source[at..].chars().next() {
         None => "end of file".to_string(),
         Some(_) => {
-            let word: String = source[at..]
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect();
-            let token = if word.is_empty() {
-                source[at..].chars().take(1).collect()
-            } else {
-                word
-            };
+            let word: String = source[at..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            let token = if word.is_empty() { source[at..].chars().take(1).collect() } else { word };
             format!("`{token}`")
         }
     };

@@ -5,33 +5,46 @@ use super::diagnostic::{Diagnostic, Span};
 use super::{Pair, Rule};
 use lagra_checker::units::Dim;
 
-/// A unit expression reduced to its dimension and its factor to SI.
+/// A unit expression reduced to its dimension and its factor to SI, `factor · 10^exp10`. The
+/// power of ten is kept apart so that it can be folded into the decimal literal before the
+/// literal is rounded: `10 cm` is the correctly rounded 0.1, not 10 × 0.01.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Unit {
     pub dim: Dim,
-    pub to_si: f64,
+    pub factor: f64,
+    pub exp10: i32,
     pub span: Span,
 }
 
-const E: f64 = 1.602_176_634e-19;
+impl Unit {
+    /// The SI value of the decimal literal `number` written with this unit.
+    pub fn convert(&self, number: &str) -> f64 {
+        let (mantissa, exp) = match number.split_once(['e', 'E']) {
+            Some((m, e)) => (m, e.parse::<i32>().unwrap_or(0)),
+            None => (number, 0),
+        };
+        let shifted: f64 = format!("{mantissa}e{}", exp.saturating_add(self.exp10)).parse().unwrap_or(f64::NAN);
+        shifted * self.factor
+    }
+}
 
-/// The known unit words.
-const WORDS: &[(&str, Dim, f64)] = &[
-    ("m", Dim::LENGTH, 1.0),
-    ("km", Dim::LENGTH, 1e3),
-    ("cm", Dim::LENGTH, 1e-2),
-    ("mm", Dim::LENGTH, 1e-3),
-    ("nm", Dim::LENGTH, 1e-9),
-    ("kg", Dim::MASS, 1.0),
-    ("g", Dim::MASS, 1e-3),
-    ("s", Dim::TIME, 1.0),
-    ("ms", Dim::TIME, 1e-3),
-    ("ns", Dim::TIME, 1e-9),
-    ("Hz", Dim([0, 0, -1, 0]), 1.0),
-    ("C", Dim::CHARGE, 1.0),
-    ("N", Dim([1, 1, -2, 0]), 1.0),
-    ("J", Dim::ENERGY, 1.0),
-    ("eV", Dim::ENERGY, E),
+/// The known unit words: dimension, factor and power of ten to SI.
+const WORDS: &[(&str, Dim, f64, i32)] = &[
+    ("m", Dim::LENGTH, 1.0, 0),
+    ("km", Dim::LENGTH, 1.0, 3),
+    ("cm", Dim::LENGTH, 1.0, -2),
+    ("mm", Dim::LENGTH, 1.0, -3),
+    ("nm", Dim::LENGTH, 1.0, -9),
+    ("kg", Dim::MASS, 1.0, 0),
+    ("g", Dim::MASS, 1.0, -3),
+    ("s", Dim::TIME, 1.0, 0),
+    ("ms", Dim::TIME, 1.0, -3),
+    ("ns", Dim::TIME, 1.0, -9),
+    ("Hz", Dim([0, 0, -1, 0]), 1.0, 0),
+    ("C", Dim::CHARGE, 1.0, 0),
+    ("N", Dim([1, 1, -2, 0]), 1.0, 0),
+    ("J", Dim::ENERGY, 1.0, 0),
+    ("eV", Dim::ENERGY, 1.602_176_634, -19),
 ];
 
 pub fn known_words() -> String {
@@ -41,8 +54,7 @@ pub fn known_words() -> String {
 /// Reads a `unit` pair: factors multiply; `/` divides by the next factor or group only.
 pub fn unit(pair: Pair) -> Result<Unit, Diagnostic> {
     let span = Span::from(pair.as_span());
-    let mut dim = Dim::NONE;
-    let mut to_si = 1.0;
+    let mut acc = Unit { dim: Dim::NONE, factor: 1.0, exp10: 0, span };
     let mut divide = false;
     for p in pair.into_inner() {
         match p.as_rule() {
@@ -50,14 +62,18 @@ pub fn unit(pair: Pair) -> Result<Unit, Diagnostic> {
             Rule::unit_group => {
                 let g = group(p)?;
                 let n: i8 = if divide { -1 } else { 1 };
-                dim = dim.mul(g.dim.pow(n));
-                to_si *= g.to_si.powi(n.into());
+                acc = Unit {
+                    dim: acc.dim.mul(g.dim.pow(n)),
+                    factor: acc.factor * g.factor.powi(n.into()),
+                    exp10: acc.exp10 + g.exp10 * i32::from(n),
+                    span,
+                };
                 divide = false;
             }
             _ => unreachable!("unit holds only groups and operators"),
         }
     }
-    Ok(Unit { dim, to_si, span })
+    Ok(acc)
 }
 
 fn group(pair: Pair) -> Result<Unit, Diagnostic> {
@@ -68,35 +84,19 @@ fn group(pair: Pair) -> Result<Unit, Diagnostic> {
     let span = Span::from(inner.as_span());
     let mut parts = inner.into_inner();
     let word = parts.next().expect("a power starts with a word");
-    let (_, dim, to_si) = WORDS.iter().find(|w| w.0 == word.as_str()).ok_or_else(|| {
+    let (_, dim, factor, exp10) = WORDS.iter().find(|w| w.0 == word.as_str()).ok_or_else(|| {
         Diagnostic::new(
             word.as_span().into(),
-            format!(
-                "unknown unit `{}`; known units: {}",
-                word.as_str(),
-                known_words()
-            ),
+            format!("unknown unit `{}`; known units: {}", word.as_str(), known_words()),
         )
     })?;
     let n: i8 = match parts.next() {
         None => 1,
-        Some(e) => e
-            .as_str()
-            .parse()
-            .ok()
-            .filter(|n: &i8| n.unsigned_abs() <= 12)
-            .ok_or_else(|| {
-                Diagnostic::new(
-                    e.as_span().into(),
-                    format!("exponent `{}` is out of range (at most 12)", e.as_str()),
-                )
-            })?,
+        Some(e) => e.as_str().parse().ok().filter(|n: &i8| n.unsigned_abs() <= 12).ok_or_else(|| {
+            Diagnostic::new(e.as_span().into(), format!("exponent `{}` is out of range (at most 12)", e.as_str()))
+        })?,
     };
-    Ok(Unit {
-        dim: dim.pow(n),
-        to_si: to_si.powi(n.into()),
-        span,
-    })
+    Ok(Unit { dim: dim.pow(n), factor: factor.powi(n.into()), exp10: exp10 * i32::from(n), span })
 }
 
 #[cfg(test)]
@@ -117,23 +117,23 @@ mod tests {
     #[test]
     fn gravitational_constant() {
         let u = parse("m^3/(kg s^2)").unwrap();
-        assert_eq!((u.dim, u.to_si), (Dim::GRAVITATIONAL, 1.0));
+        assert_eq!((u.dim, u.factor, u.exp10), (Dim::GRAVITATIONAL, 1.0, 0));
     }
 
     #[test]
-    fn prefixes_scale() {
-        assert_eq!(parse("km/ms").unwrap().to_si, 1e6);
-        assert_eq!(parse("g cm^-3").unwrap().to_si, 1e-3 / 1e-6);
+    fn prefixes_convert_exactly() {
+        assert_eq!(parse("km/ms").unwrap().convert("1"), 1e6);
+        assert_eq!(parse("g cm^-3").unwrap().convert("1"), 1e3);
+        assert_eq!(parse("cm").unwrap().convert("10"), 0.1);
+        assert_eq!(parse("mm").unwrap().convert("1.5e3"), 1.5);
+        // a factor that is not a power of ten costs one more rounding
+        assert!((parse("eV").unwrap().convert("1") / 1.602_176_634e-19 - 1.0).abs() <= f64::EPSILON);
     }
 
     #[test]
     fn unknown_word_is_named() {
         let e = parse("m/furlong").unwrap_err();
-        assert!(
-            e.message.starts_with("unknown unit `furlong`"),
-            "{}",
-            e.message
-        );
+        assert!(e.message.starts_with("unknown unit `furlong`"), "{}", e.message);
         assert_eq!(e.span.start, 2);
     }
 }

@@ -36,11 +36,7 @@ impl VelocityVerlet {
                 x[c] += dt * v[c];
             }
         }
-        let half = if g.dissipative() {
-            Some(s.v.clone())
-        } else {
-            None
-        };
+        let half = if g.dissipative() { Some(s.v.clone()) } else { None };
         self.potential = g.forces(s, &mut self.f)?;
         kick(&mut s.v, &self.f, &g.masses, h);
         if let Some(half) = half {

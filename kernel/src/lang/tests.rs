@@ -1,0 +1,168 @@
+//! Every kind of input error: its exact message and its position.
+
+use super::compile;
+
+const GOOD: &str = r#"scene s {
+  entity { position: [0, 0, 0], mass: 1 }
+  entity { position: [1, 0, 0], mass: 1 }
+  bond harmonic [0, 1] { k: 2.0, r0: 1.0 }
+  solver { dt: 0.01, steps: 10 }
+}"#;
+
+/// The (line, column, message) of the error in `GOOD` with `from` replaced by `to`.
+fn error(from: &str, to: &str) -> (usize, usize, String) {
+    assert!(GOOD.contains(from), "{from}");
+    let src = GOOD.replacen(from, to, 1);
+    let d = compile(&src).expect_err("must not compile");
+    let (l, c) = d.line_col(&src);
+    (l, c, d.message)
+}
+
+fn at(l: usize, c: usize, m: &str) -> (usize, usize, String) {
+    (l, c, m.to_string())
+}
+
+#[test]
+fn the_good_scene_compiles() {
+    let s = compile(GOOD).unwrap();
+    assert_eq!((s.model.bodies.len(), s.model.terms.len(), s.solver.steps), (2, 1, 10));
+}
+
+#[test]
+fn syntax_error_says_what_was_expected() {
+    assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver` or a name, found end of file"));
+}
+
+#[test]
+fn unknown_keyword() {
+    assert_eq!(error("solver {", "solvr {"), at(5, 3, "unknown term `solvr`; known: gravity"));
+    assert_eq!(error("bond harmonic", "bond spring"), at(4, 8, "unknown bond `spring`; known: harmonic"));
+    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency"));
+}
+
+#[test]
+fn unknown_template() {
+    assert_eq!(
+        error("entity { position: [1", "entity { type: bead, position: [1"),
+        at(3, 18, "unknown entity type `bead`; known types: ball, ball_large, ball_small")
+    );
+}
+
+#[test]
+fn templates_supply_fields() {
+    let src = GOOD
+        .replace("scene s {", "scene s {\n  entity bead { mass: 3.0 }")
+        .replace("position: [1, 0, 0], mass: 1", "type: bead, position: [1, 0, 0]");
+    assert_eq!(compile(&src).unwrap().model.bodies[1].mass, 3.0);
+}
+
+#[test]
+fn bond_index_out_of_range() {
+    assert_eq!(error("[0, 1]", "[0, 2]"), at(4, 21, "body index 2 is out of range: the scene has 2 entities (0..1)"));
+    assert_eq!(error("[0, 1]", "[0, 0]"), at(4, 21, "HarmonicBond lists body 0 twice"));
+    assert_eq!(error("[0, 1]", "[0, 1, 1]"), at(4, 17, "HarmonicBond joins 2 bodies, got 3"));
+}
+
+#[test]
+fn duplicate_field() {
+    assert_eq!(error("r0: 1.0", "r0: 1.0, k: 3"), at(4, 43, "duplicate field `k`"));
+}
+
+#[test]
+fn missing_field() {
+    assert_eq!(error(", r0: 1.0", ""), at(4, 8, "HarmonicBond needs `r0` (L (length))"));
+    assert_eq!(error("position: [0, 0, 0], ", ""), at(2, 10, "entity needs a position"));
+    assert_eq!(error("  solver { dt: 0.01, steps: 10 }\n", ""), at(1, 1, "scene s has no solver block"));
+}
+
+#[test]
+fn unknown_field() {
+    assert_eq!(
+        error("r0: 1.0", "r0: 1.0, kk: 3"),
+        at(4, 43, "unknown field `kk` for HarmonicBond; expected k, r0, damping")
+    );
+}
+
+#[test]
+fn non_positive_mass() {
+    assert_eq!(error("[1, 0, 0], mass: 1", "[1, 0, 0], mass: -1"), at(3, 39, "entity.mass must be positive, got -1"));
+    assert_eq!(error("[1, 0, 0], mass: 1", "[1, 0, 0], mass: 0"), at(3, 39, "entity.mass must be positive, got 0"));
+}
+
+#[test]
+fn non_finite_number() {
+    assert_eq!(error("k: 2.0", "k: 1e999"), at(4, 29, "non-finite number `1e999`"));
+    assert_eq!(error("k: 2.0", "k: nan"), at(4, 29, "HarmonicBond.k expects a number, found `nan`"));
+}
+
+#[test]
+fn unit_mismatch() {
+    let si = GOOD.replace("scene s {", "scene s {\n  units si");
+    let d = compile(&si.replace("k: 2.0", "k: 2.0 C")).unwrap_err();
+    assert_eq!(d.message, "HarmonicBond.k expects M·T⁻² (energy/length²), found Q (charge)");
+    let d = compile(&si.replace("dt: 0.01", "dt: 0.01 m")).unwrap_err();
+    assert_eq!(d.message, "solver.dt expects T (time), found L (length)");
+}
+
+#[test]
+fn units_convert_to_si() {
+    let si = GOOD
+        .replace("scene s {", "scene s {\n  units si")
+        .replace("k: 2.0", "k: 2.0 N/m")
+        .replace("r0: 1.0", "r0: 10 cm");
+    let s = compile(&si).unwrap();
+    assert_eq!(s.model.terms[0].params[..2], [2.0, 0.1]);
+}
+
+#[test]
+fn physical_unit_in_reduced_units_is_an_error() {
+    assert_eq!(
+        error("k: 2.0", "k: 2.0 N/m"),
+        at(4, 33, "a physical unit in a scene with reduced units; declare `units si` or write a bare number")
+    );
+}
+
+#[test]
+fn unknown_unit() {
+    let si = GOOD.replace("scene s {", "scene s {\n  units si").replace("r0: 1.0", "r0: 1.0 furlong");
+    assert!(compile(&si).unwrap_err().message.starts_with("unknown unit `furlong`; known units: m, km"));
+}
+
+#[test]
+fn solver_errors() {
+    assert_eq!(error("steps: 10", "steps: 10, duration: 1"), at(5, 33, "give `steps` or `duration`, not both"));
+    assert_eq!(error("steps: 10", "steps: 2.5"), at(5, 29, "solver.steps expects a whole number ≥ 1, got 2.5"));
+    assert_eq!(
+        error("dt: 0.01", "dt: 0.01, integrator: rk4"),
+        at(5, 34, "unknown integrator `rk4`; known: velocity_verlet")
+    );
+    assert_eq!(compile(&GOOD.replace("steps: 10", "duration: 1")).unwrap().solver.steps, 100);
+}
+
+#[test]
+fn claim_errors() {
+    assert_eq!(
+        error("  solver", "  @expect energy_conservation\n  solver"),
+        at(5, 11, "energy_conservation needs a tolerance: `{ tol: 1e-5 }` (relative)")
+    );
+    assert_eq!(
+        error("  solver", "  @expect momentum_conservation\n  @expect momentum_conservation\n  solver"),
+        at(6, 11, "momentum_conservation is declared twice")
+    );
+}
+
+#[test]
+fn prediction_that_does_not_apply() {
+    assert_eq!(
+        error("  solver", "  @predict kepler_period\n  solver"),
+        at(5, 12, "kepler_period: needs exactly two bodies and one gravity interaction")
+    );
+}
+
+#[test]
+fn comments_and_empty_bodies() {
+    let s = compile(&GOOD.replace("scene s {", "scene s { // a comment\n  // another")).unwrap();
+    assert_eq!(s.name, "s");
+    assert_eq!(error("  entity { position: [0, 0, 0], mass: 1 }\n  entity { position: [1, 0, 0], mass: 1 }\n  bond harmonic [0, 1] { k: 2.0, r0: 1.0 }\n", ""), at(1, 1, "scene s has no entities"));
+}
