@@ -1,0 +1,194 @@
+//! End-to-end: the `lagra` binary on real scene files, through its exit codes and outputs.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lagra(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lagra")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Writes `text` as a scene file in `dir`.
+fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn oscillator() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/oscillator.lagra")).unwrap()
+}
+
+fn json(args: &[&str]) -> (Output, Value) {
+    let mut a = vec!["run", "--json"];
+    a.extend_from_slice(args);
+    let o = lagra(&a);
+    let v = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(&o)));
+    (o, v)
+}
+
+#[test]
+fn oscillator_passes_and_reports_its_period() {
+    let o = lagra(&["run", "scenes/oscillator.lagra"]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}{}", stderr(&o));
+    assert!(out.contains("energy_conservation PASS  max|H+Q−H₀|/|H₀| ≤ "), "{out}");
+    assert!(out.contains("certified over 5000 checkpoints (tol 1e-05, Q dissipated by HarmonicBond)"), "{out}");
+    assert!(out.contains("momentum_conservation PASS"), "{out}");
+    assert!(out.contains("oscillator_period agrees  measured 3.14"), "{out}");
+}
+
+#[test]
+fn kepler_passes_every_claim_and_the_third_law() {
+    let (o, v) = json(&["scenes/kepler.lagra"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(v["passed"], true);
+    let claims = v["claims"].as_array().unwrap();
+    assert_eq!(claims.len(), 4);
+    assert!(claims.iter().all(|c| c["status"] == "PASS"), "{claims:?}");
+    let p = &v["predictions"][0];
+    assert_eq!(p["name"], "kepler_period");
+    assert!(p["rel_diff"].as_f64().unwrap() < 1e-5, "{p}");
+}
+
+/// The measured period converges to the closed form at second order in dt.
+#[test]
+fn oscillator_period_error_is_second_order_in_dt() {
+    let dir = tempfile::tempdir().unwrap();
+    let diff = |dt: &str, steps: &str| {
+        let text = oscillator().replace("dt: 0.002", &format!("dt: {dt}, steps: {steps}"));
+        let p = scene(dir.path(), &format!("osc{dt}.lagra"), &text);
+        let (o, v) = json(&[p.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{v}");
+        v["predictions"][0]["rel_diff"].as_f64().unwrap()
+    };
+    let (coarse, fine) = (diff("0.002", "5000"), diff("0.001", "10000"));
+    assert!(fine < 2e-7, "{fine}");
+    assert!((3.5..4.5).contains(&(coarse / fine)), "error ratio {} for dt halved", coarse / fine);
+}
+
+#[test]
+fn a_time_step_far_too_large_fails_and_names_the_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene(dir.path(), "big_dt.lagra", &oscillator().replace("dt: 0.002", "dt: 0.5"));
+    let o = lagra(&["run", p.to_str().unwrap()]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    let line = out.lines().find(|l| l.starts_with("energy_conservation FAIL  at step ")).expect(&out);
+    let step: u64 = line["energy_conservation FAIL  at step ".len()..].split(':').next().unwrap().parse().unwrap();
+    assert!(out.contains(&format!("halted at step {step}: energy_conservation is certainly violated")), "{out}");
+    assert!(line.contains("> tol 1e-05"), "{line}");
+}
+
+#[test]
+fn bad_input_is_one_located_line_a_caret_and_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("k: 2.0", "k: 2.0 C", "units", "HarmonicBond.k expects M·T⁻² (energy/length²), found Q (charge)"),
+        ("[0, 1]", "[0, 7]", "index", "body index 7 is out of range: the scene has 2 entities (0..1)"),
+        ("mass: 1.0 }", "mass: 1.0, mass: 2 }", "duplicate", "duplicate field `mass`"),
+        ("bond harmonic", "bond elastic", "keyword", "unknown bond `elastic`; known: harmonic"),
+        ("position: [-1.35", "position: [-1e400", "nonfinite", "non-finite number `-1e400`"),
+    ];
+    for (from, to, name, message) in cases {
+        let text = oscillator().replacen(from, to, 1);
+        let text = if name == "units" { text.replace("scene oscillator {", "scene oscillator {\n  units si") } else { text };
+        let p = scene(dir.path(), &format!("{name}.lagra"), &text);
+        let o = lagra(&["run", p.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        let lines: Vec<&str> = err.lines().collect();
+        let head = format!("{}:", p.display());
+        assert!(lines[0].starts_with(&head) && lines[0].ends_with(message), "{name}: {err}");
+        let col: usize = lines[0][head.len()..].split(':').nth(1).unwrap().parse().unwrap();
+        assert_eq!(lines[2].trim_end().chars().count(), col + 2, "{name}: caret under column {col}\n{err}");
+        assert!(lines[2].trim_end().ends_with('^') && !err.contains("panicked"), "{err}");
+        assert!(stdout(&o).is_empty());
+    }
+}
+
+#[test]
+fn missing_file_and_bad_arguments_exit_2() {
+    let o = lagra(&["run", "scenes/no_such_scene.lagra"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("lagra: cannot read scenes/no_such_scene.lagra"), "{}", stderr(&o));
+    assert_eq!(lagra(&["run", "scenes/oscillator.lagra", "--steps", "0"]).status.code(), Some(2));
+    assert_eq!(lagra(&["run", "scenes/oscillator.lagra", "--steps", "many"]).status.code(), Some(2));
+    assert_eq!(lagra(&["fly"]).status.code(), Some(2));
+}
+
+#[test]
+fn coordinates_that_overflow_halt_the_run_never_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = oscillator().replace("[-1.35, 0, 0]", "[-1e308, 0, 0]").replace("[ 1.35, 0, 0]", "[1e308, 0, 0]");
+    let p = scene(dir.path(), "huge.lagra", &text);
+    let o = lagra(&["run", p.to_str().unwrap()]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(!out.contains("PASS"), "{out}");
+    assert!(out.contains("non-finite"), "{out}");
+}
+
+#[test]
+fn certificate_holds_the_model_the_claims_and_every_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = dir.path().join("osc.cert.json");
+    let o = lagra(&["run", "scenes/oscillator.lagra", "--certificate", c.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: Value = serde_json::from_slice(&std::fs::read(&c).unwrap()).unwrap();
+    assert_eq!(v["format"], "lagra-certificate/0");
+    assert!(v["digest"].as_str().unwrap().starts_with("sha256:"));
+    assert_eq!(v["model"]["terms"][0]["kind"], "HarmonicBond");
+    assert_eq!(v["model"]["terms"][0]["params"], serde_json::json!([2.0, 2.0, 0.04]));
+    let trails = v["trails"].as_array().unwrap();
+    assert_eq!(trails.len(), 2);
+    for t in trails {
+        let marks = t["marks"].as_array().unwrap();
+        assert_eq!(marks.len(), 5000);
+        assert_eq!(marks[4999][0], 5000);
+        assert!(marks.iter().all(|m| m[1].as_f64().unwrap() <= m[2].as_f64().unwrap()));
+    }
+    assert!(v["verdicts"][1].as_str().unwrap().starts_with("energy_conservation PASS"));
+}
+
+#[test]
+fn trace_has_a_line_per_frame_and_is_identical_across_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.jsonl"), dir.path().join("b.jsonl"));
+    for t in [&a, &b] {
+        let o = lagra(&["run", "scenes/oscillator.lagra", "--steps", "3600", "--trace", t.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    }
+    let text = std::fs::read_to_string(&a).unwrap();
+    assert_eq!(text, std::fs::read_to_string(&b).unwrap());
+    let lines: Vec<Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 301, "frames at steps 0, 12, ..., 3600");
+    assert_eq!(lines[300]["step"], 3600);
+    assert_eq!(lines[300]["x"].as_array().unwrap().len(), 2);
+    assert!(lines.iter().all(|l| l["energy"].as_f64().unwrap().is_finite()));
+}
+
+#[test]
+fn a_run_too_short_to_measure_the_period_does_not_pass() {
+    let o = lagra(&["run", "scenes/oscillator.lagra", "--steps", "120"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains("oscillator_period NOT MEASURED"), "{}", stdout(&o));
+}
+
+#[test]
+fn json_report_has_the_timing_fields() {
+    let (o, v) = json(&["scenes/oscillator.lagra", "--steps", "3000"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(v["steps"], 3000);
+    for k in ["wall_s", "steps_per_s", "ns_per_atom_step"] {
+        assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
+    }
+}
