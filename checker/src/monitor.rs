@@ -234,3 +234,100 @@ fn norm1(a: &[f64; 3]) -> Interval {
 fn budget(t: &Track, step: u64) -> f64 {
     t.claim.tol.unwrap_or(ROUNDOFF_BUDGET * step.max(1) as f64 * t.scale)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Body, TermInstance, UnitSystem};
+
+    /// A free particle and a spring-bound pair: energy ½·1·1² + ½·2·(1.5−1)² = 0.75.
+    fn model() -> Model {
+        Model {
+            units: UnitSystem::Reduced,
+            bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 1.0, charge: 0.0 }],
+            terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
+        }
+    }
+
+    fn claim(kind: ClaimKind, tol: Option<f64>, every: u64) -> Claim {
+        Claim { kind, tol, every }
+    }
+
+    fn observe(m: &mut Monitor, step: u64, x1: f64, v0: f64) -> Result<(), Halt> {
+        let x = [[0.0; 3], [x1, 0.0, 0.0]];
+        let v = [[v0, 0.0, 0.0], [0.0; 3]];
+        m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v })
+    }
+
+    #[test]
+    fn an_unchanged_state_passes() {
+        let mut m = Monitor::new(model(), vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 3).unwrap();
+        for step in 0..=3 {
+            observe(&mut m, step, 1.5, 1.0).unwrap();
+        }
+        assert!(m.finish().verdicts[0].is_pass());
+    }
+
+    #[test]
+    fn a_state_moved_by_one_ulp_breaks_a_zero_tolerance_claim_at_that_step() {
+        let tol = 1e-16;
+        let mut m = Monitor::new(model(), vec![claim(ClaimKind::EnergyConservation, Some(tol), 1)], 3).unwrap();
+        observe(&mut m, 0, 1.5, 1.0).unwrap();
+        observe(&mut m, 1, 1.5, 1.0).unwrap();
+        let nudged = f64::from_bits(1.5f64.to_bits() + 1);
+        let err = observe(&mut m, 2, nudged, 1.0 + f64::EPSILON).unwrap_err();
+        assert!(matches!(err, Halt::Breach(Breach { step: 2, .. })), "{err:?}");
+        assert!(matches!(m.finish().verdicts[0], Verdict::Fail(_)));
+    }
+
+    #[test]
+    fn a_momentum_jump_fails_its_round_off_budget() {
+        let mut m = Monitor::new(model(), vec![claim(ClaimKind::MomentumConservation, None, 1)], 2).unwrap();
+        observe(&mut m, 0, 1.5, 1.0).unwrap();
+        observe(&mut m, 1, 1.5, 1.0).unwrap();
+        assert!(matches!(observe(&mut m, 2, 1.5, 1.0 + 1e-9), Err(Halt::Breach(_))));
+    }
+
+    #[test]
+    fn a_non_finite_state_halts_and_never_passes() {
+        let mut m = Monitor::new(model(), vec![claim(ClaimKind::MomentumConservation, None, 1)], 2).unwrap();
+        observe(&mut m, 0, 1.5, 1.0).unwrap();
+        assert!(matches!(observe(&mut m, 1, f64::NAN, 1.0), Err(Halt::InvalidState(_))));
+        assert!(!m.finish().verdicts[0].is_pass());
+    }
+
+    #[test]
+    fn every_thins_checkpoints_but_keeps_the_last() {
+        let mut m = Monitor::new(model(), vec![claim(ClaimKind::EnergyConservation, Some(1e-9), 4)], 10).unwrap();
+        for step in 0..=10 {
+            observe(&mut m, step, 1.5, 1.0).unwrap();
+        }
+        let out = m.finish();
+        let steps: Vec<u64> = out.trails[0].marks.iter().map(|k| k.step).collect();
+        assert_eq!(steps, [4, 8, 10]);
+    }
+
+    #[test]
+    fn dissipated_energy_enters_the_balance() {
+        // The pair is moving apart at unit speed with damping 1: power γṙ² = 1 is dissipated.
+        let mut damped = model();
+        damped.terms[0].params[2] = 1.0;
+        let mut m = Monitor::new(damped, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
+        let x = [[0.0; 3], [1.5, 0.0, 0.0]];
+        let v0 = [[0.0; 3], [1.0, 0.0, 0.0]];
+        m.observe(&Snapshot { step: 0, t: 0.0, x: &x, v: &v0 }).unwrap();
+        // One time unit later the kinetic energy ½ has become exactly the dissipated ½.
+        let v1 = [[0.0; 3], [0.0, 0.0, 0.0]];
+        let err = m.observe(&Snapshot { step: 1, t: 1.0, x: &x, v: &v1 });
+        // The trapezoid saw power 1 then 0: Q = ½, so H + Q = H₀ holds exactly.
+        assert_eq!(err, Ok(()));
+        assert_eq!(m.finish().dissipators, [Kind::HarmonicBond]);
+    }
+
+    #[test]
+    fn a_model_with_a_bad_body_is_rejected() {
+        let mut bad = model();
+        bad.bodies[0].mass = 0.0;
+        assert!(Monitor::new(bad, vec![], 1).is_err());
+    }
+}
