@@ -1,6 +1,7 @@
 //! The run's report, as text for people and as JSON for machines (the same data).
 
 use lagra_checker::decision::Verdict;
+use lagra_checker::model::UnitSystem;
 use lagra_checker::monitor::Halt;
 use lagra_checker::render::{line, sci, up};
 use lagra_kernel::run::{Measured, Report, Stop};
@@ -32,6 +33,9 @@ pub struct Summary {
     pub terms: Vec<TermCount>,
     pub integrator: &'static str,
     pub dt: f64,
+    /// The unit `dt` is in: " s" for SI scenes, nothing for reduced units.
+    #[serde(skip)]
+    time_unit: &'static str,
     pub steps: u64,
     pub wall_s: f64,
     pub steps_per_s: f64,
@@ -82,6 +86,7 @@ impl Summary {
             terms,
             integrator: scene.solver.integrator.name(),
             dt: scene.solver.dt,
+            time_unit: if scene.model.units == UnitSystem::Si { " s" } else { "" },
             steps: r.steps,
             wall_s: r.wall_s,
             steps_per_s: r.steps as f64 / r.wall_s,
@@ -105,7 +110,7 @@ impl Summary {
         let terms = if terms.is_empty() { "none (free particles)".to_string() } else { terms.join(", ") };
         let _ = writeln!(s, "bodies      {}", self.bodies);
         let _ = writeln!(s, "terms       {terms}");
-        let _ = writeln!(s, "integrator  {}, dt {}, {} steps", self.integrator, self.dt, self.steps);
+        let _ = writeln!(s, "integrator  {}, dt {}{}, {} steps", self.integrator, self.dt, self.time_unit, self.steps);
         let _ = writeln!(s, "wall        {:.3} s ({:.0} steps/s)", self.wall_s, self.steps_per_s);
         for c in &self.claims {
             let _ = writeln!(s, "{}", c.line);

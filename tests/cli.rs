@@ -46,6 +46,22 @@ fn oscillator_passes_and_reports_its_period() {
     assert!(out.contains("oscillator_period agrees  measured 3.14"), "{out}");
 }
 
+/// Every scene shipped in `scenes/` passes its own claims and predictions.
+#[test]
+fn every_scene_passes_its_own_expects() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "lagra") {
+            let o = lagra(&["run", p.to_str().unwrap()]);
+            assert_eq!(o.status.code(), Some(0), "{}:\n{}{}", p.display(), stdout(&o), stderr(&o));
+            seen += 1;
+        }
+    }
+    assert!(seen >= 3, "only {seen} scenes found");
+}
+
 #[test]
 fn kepler_passes_every_claim_and_the_third_law() {
     let (o, v) = json(&["scenes/kepler.lagra"]);
@@ -100,7 +116,8 @@ fn bad_input_is_one_located_line_a_caret_and_exit_2() {
     ];
     for (from, to, name, message) in cases {
         let text = oscillator().replacen(from, to, 1);
-        let text = if name == "units" { text.replace("scene oscillator {", "scene oscillator {\n  units si") } else { text };
+        let text =
+            if name == "units" { text.replace("scene oscillator {", "scene oscillator {\n  units si") } else { text };
         let p = scene(dir.path(), &format!("{name}.lagra"), &text);
         let o = lagra(&["run", p.to_str().unwrap()]);
         let err = stderr(&o);

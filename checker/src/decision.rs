@@ -90,11 +90,11 @@ impl Judge {
         self.checkpoints += 1;
         let breach = Breach { claim: self.claim, step, lower: deviation.inf(), upper: deviation.sup(), tol };
         // An empty enclosure means the evaluation itself went wrong: never a PASS.
-        if deviation.is_empty() || !tol.is_finite() || !(tol >= 0.0) {
+        if deviation.is_empty() || !tol.is_finite() || tol < 0.0 {
             self.undecided.get_or_insert(Breach { lower: f64::NAN, upper: f64::NAN, ..breach });
         } else if breach.lower > tol {
             return Err(breach);
-        } else if !(breach.upper <= tol) {
+        } else if breach.upper > tol || breach.upper.is_nan() {
             self.undecided.get_or_insert(breach);
         } else {
             self.bound = self.bound.max(breach.upper);

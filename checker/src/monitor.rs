@@ -123,7 +123,7 @@ impl Monitor {
     /// Checks the claims due at this state. The first state handed in is the reference.
     pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
         let last = self.last_step;
-        let due = |c: &Claim| c.kind.is_dynamic() && (s.step % c.every == 0 || s.step == last);
+        let due = |c: &Claim| c.kind.is_dynamic() && (s.step.is_multiple_of(c.every) || s.step == last);
         if self.reference.is_some() && !self.tracks.iter().any(|t| due(&t.claim)) {
             return Ok(());
         }
@@ -154,7 +154,7 @@ impl Monitor {
                         Some(l) => {
                             let power = q.dissipated_power(model);
                             let dt = point(s.t) - point(l.t);
-                            l.dissipated = l.dissipated + dt * (l.power + power) * point(0.5);
+                            l.dissipated += dt * (l.power + power) * point(0.5);
                             (l.t, l.power) = (s.t, power);
                             h + l.dissipated
                         }
@@ -220,7 +220,7 @@ fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Interval
     let mut sum = point(0.0);
     for (b, (x, v)) in model.bodies.iter().zip(s.x.iter().zip(s.v)) {
         let speed = norm1(v);
-        sum = sum + point(b.mass) * w(x) * speed;
+        sum += point(b.mass) * w(x) * speed;
     }
     sum.sup()
 }

@@ -26,12 +26,6 @@ impl Dim {
     pub const DAMPING: Dim = Dim([1, 0, -1, 0]);
     pub const GRAVITATIONAL: Dim = Dim([-1, 3, -2, 0]);
 
-    pub fn mul(self, o: Dim) -> Dim {
-        Dim(std::array::from_fn(|i| self.0[i] + o.0[i]))
-    }
-    pub fn div(self, o: Dim) -> Dim {
-        Dim(std::array::from_fn(|i| self.0[i] - o.0[i]))
-    }
     pub fn pow(self, n: i8) -> Dim {
         Dim(self.0.map(|e| e * n))
     }
@@ -53,6 +47,20 @@ impl Dim {
             (Dim([1, 1, -2, 0]), "force"),
         ];
         NAMES.iter().find(|(d, _)| *d == self).map(|(_, n)| *n)
+    }
+}
+
+impl Mul for Dim {
+    type Output = Dim;
+    fn mul(self, o: Dim) -> Dim {
+        Dim(std::array::from_fn(|i| self.0[i] + o.0[i]))
+    }
+}
+
+impl Div for Dim {
+    type Output = Dim;
+    fn div(self, o: Dim) -> Dim {
+        Dim(std::array::from_fn(|i| self.0[i] - o.0[i]))
     }
 }
 
@@ -115,13 +123,13 @@ impl Sub for Dimension {
 impl Mul for Dimension {
     type Output = Self;
     fn mul(self, o: Self) -> Self {
-        self.zip(o, |a, b| Ok(a.mul(b)))
+        self.zip(o, |a, b| Ok(a * b))
     }
 }
 impl Div for Dimension {
     type Output = Self;
     fn div(self, o: Self) -> Self {
-        self.zip(o, |a, b| Ok(a.div(b)))
+        self.zip(o, |a, b| Ok(a / b))
     }
 }
 impl Neg for Dimension {

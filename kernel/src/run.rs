@@ -102,7 +102,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     stop = Some(Stop::Checker(h));
                 }
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
-                if state.step % scene.solver.steps_per_frame == 0 || state.step == steps {
+                if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
                     trace(&state, solver.potential)?;
                 }
             }

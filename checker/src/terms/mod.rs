@@ -154,7 +154,7 @@ impl Kind {
         };
         expect("potential", v, Dim::ENERGY)?;
         match f {
-            Some(f) => expect("dissipation function", f, Dim::ENERGY.div(Dim::TIME)),
+            Some(f) => expect("dissipation function", f, Dim::ENERGY / Dim::TIME),
             None => Ok(()),
         }
     }

@@ -40,6 +40,9 @@ const WORDS: &[(&str, Dim, f64, i32)] = &[
     ("s", Dim::TIME, 1.0, 0),
     ("ms", Dim::TIME, 1.0, -3),
     ("ns", Dim::TIME, 1.0, -9),
+    ("min", Dim::TIME, 60.0, 0),
+    ("h", Dim::TIME, 3600.0, 0),
+    ("d", Dim::TIME, 86400.0, 0),
     ("Hz", Dim([0, 0, -1, 0]), 1.0, 0),
     ("C", Dim::CHARGE, 1.0, 0),
     ("N", Dim([1, 1, -2, 0]), 1.0, 0),
@@ -63,7 +66,7 @@ pub fn unit(pair: Pair) -> Result<Unit, Diagnostic> {
                 let g = group(p)?;
                 let n: i8 = if divide { -1 } else { 1 };
                 acc = Unit {
-                    dim: acc.dim.mul(g.dim.pow(n)),
+                    dim: acc.dim * g.dim.pow(n),
                     factor: acc.factor * g.factor.powi(n.into()),
                     exp10: acc.exp10 + g.exp10 * i32::from(n),
                     span,

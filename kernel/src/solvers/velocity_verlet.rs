@@ -75,7 +75,8 @@ mod tests {
             bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 3.0, charge: 0.0 }],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
         };
-        let s = State { step: 0, t: 0.0, x: vec![[0.0; 3], [1.7, 0.2, 0.0]], v: vec![[0.1, 0.3, 0.0], [-0.2, 0.0, 0.4]] };
+        let s =
+            State { step: 0, t: 0.0, x: vec![[0.0; 3], [1.7, 0.2, 0.0]], v: vec![[0.1, 0.3, 0.0], [-0.2, 0.0, 0.4]] };
         (LagrangianGraph::new(&model), s)
     }
 
