@@ -91,6 +91,24 @@ fn oscillator_period_error_is_second_order_in_dt() {
     assert!((3.5..4.5).contains(&(coarse / fine)), "error ratio {} for dt halved", coarse / fine);
 }
 
+/// Thinning checkpoints changes how often the balance is compared, not how well Q is integrated.
+#[test]
+fn thinned_checkpoints_certify_the_same_energy_balance() {
+    let dir = tempfile::tempdir().unwrap();
+    let bound = |text: &str, name: &str| {
+        let p = scene(dir.path(), name, text);
+        let (o, v) = json(&[p.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{v}");
+        let line = v["claims"][1]["line"].as_str().unwrap().to_string();
+        let checkpoints = v["claims"][1]["checkpoints"].as_u64().unwrap();
+        (v["claims"][1]["bound"].as_f64().unwrap(), checkpoints, line)
+    };
+    let full = bound(&oscillator(), "full.lagra");
+    let thin = bound(&oscillator().replace("{ tol: 1e-5 }", "{ tol: 1e-5, every: 50 }"), "thin.lagra");
+    assert_eq!((full.1, thin.1), (5000, 100));
+    assert!(thin.0 <= full.0 && thin.0 > 0.5 * full.0, "{full:?} {thin:?}");
+}
+
 #[test]
 fn a_time_step_far_too_large_fails_and_names_the_step() {
     let dir = tempfile::tempdir().unwrap();

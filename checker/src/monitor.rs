@@ -58,7 +58,7 @@ pub struct Trail {
     pub marks: Vec<Mark>,
 }
 
-/// Energy removed by dissipative terms, integrated by the trapezoid rule over the checkpoints.
+/// Energy removed by dissipative terms, integrated by the trapezoid rule over every step.
 struct Ledger {
     t: f64,
     power: Interval,
@@ -69,7 +69,6 @@ struct Track {
     claim: Claim,
     judge: Judge,
     marks: Vec<Mark>,
-    ledger: Option<Ledger>,
     scale: f64,
     stopped: Option<Verdict>,
 }
@@ -85,6 +84,9 @@ pub struct Monitor {
     tracks: Vec<Track>,
     last_step: u64,
     reference: Option<Reference>,
+    /// Whether energy is claimed on a model with dissipative terms (then it is a balance).
+    balance: bool,
+    ledger: Option<Ledger>,
 }
 
 /// What the checker concluded about a run.
@@ -106,25 +108,24 @@ impl Monitor {
                 return Err(format!("{}: every must be at least 1", c.kind.name()));
             }
         }
+        let balance = claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation)
+            && model.terms.iter().any(|t| t.kind.dissipative());
         let tracks = claims
             .into_iter()
-            .map(|claim| Track {
-                judge: Judge::new(claim.kind),
-                claim,
-                marks: vec![],
-                ledger: None,
-                scale: 0.0,
-                stopped: None,
-            })
+            .map(|claim| Track { judge: Judge::new(claim.kind), claim, marks: vec![], scale: 0.0, stopped: None })
             .collect();
-        Ok(Monitor { model, tracks, last_step, reference: None })
+        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None })
     }
 
-    /// Checks the claims due at this state. The first state handed in is the reference.
+    /// Checks the claims due at this state. The first state handed in is the reference. For an
+    /// energy balance every step must be handed in: the dissipated energy is integrated over all
+    /// of them, whatever the claim's `every`.
     pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
         let last = self.last_step;
-        let due = |c: &Claim| c.kind.is_dynamic() && (s.step.is_multiple_of(c.every) || s.step == last);
-        if self.reference.is_some() && !self.tracks.iter().any(|t| due(&t.claim)) {
+        let due = |t: &Track| {
+            t.claim.kind.is_dynamic() && t.stopped.is_none() && (s.step.is_multiple_of(t.claim.every) || s.step == last)
+        };
+        if self.reference.is_some() && self.ledger.is_none() && !self.tracks.iter().any(due) {
             return Ok(());
         }
         if let Err(e) = self.model.check_state(s) {
@@ -136,30 +137,23 @@ impl Monitor {
         let q = Lifted::new(&self.model, s, &Interval::EMPTY);
         let model = &self.model;
         let Some(r) = &self.reference else {
-            let power = q.dissipated_power(model);
-            for t in &mut self.tracks {
-                if t.claim.kind == ClaimKind::EnergyConservation {
-                    t.ledger = Some(Ledger { t: s.t, power, dissipated: point(0.0) });
-                }
+            if self.balance {
+                self.ledger = Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: point(0.0) });
             }
             self.reference =
                 Some(Reference { energy: q.energy(model), momentum: q.momentum(), angular: q.angular_momentum() });
             return Ok(());
         };
-        for t in self.tracks.iter_mut().filter(|t| due(&t.claim) && t.stopped.is_none()) {
+        if let Some(l) = &mut self.ledger {
+            let power = q.dissipated_power(model);
+            l.dissipated += (point(s.t) - point(l.t)) * (l.power + power) * point(0.5);
+            (l.t, l.power) = (s.t, power);
+        }
+        let dissipated = self.ledger.as_ref().map_or(point(0.0), |l| l.dissipated);
+        for t in self.tracks.iter_mut().filter(|t| due(t)) {
             let (deviation, tol) = match t.claim.kind {
                 ClaimKind::EnergyConservation => {
-                    let h = q.energy(model);
-                    let balance = match &mut t.ledger {
-                        Some(l) => {
-                            let power = q.dissipated_power(model);
-                            let dt = point(s.t) - point(l.t);
-                            l.dissipated += dt * (l.power + power) * point(0.5);
-                            (l.t, l.power) = (s.t, power);
-                            h + l.dissipated
-                        }
-                        None => h,
-                    };
+                    let balance = q.energy(model) + dissipated;
                     ((balance - r.energy).abs() / r.energy.abs(), t.claim.tol.unwrap_or(f64::NAN))
                 }
                 ClaimKind::MomentumConservation => {
@@ -183,14 +177,17 @@ impl Monitor {
 
     pub fn finish(self) -> Outcome {
         let model = self.model;
-        let mut dissipators = vec![];
+        let dissipators = match self.ledger {
+            Some(l) if l.dissipated.sup() > 0.0 => Kind::ALL
+                .iter()
+                .copied()
+                .filter(|k| k.dissipative() && model.terms.iter().any(|t| t.kind == *k))
+                .collect(),
+            _ => vec![],
+        };
         let mut verdicts = vec![];
         let mut trails = vec![];
         for t in self.tracks {
-            if t.ledger.as_ref().is_some_and(|l| l.dissipated.sup() > 0.0) {
-                dissipators = model.terms.iter().map(|t| t.kind).filter(|k| k.dissipative()).collect();
-                dissipators.dedup();
-            }
             verdicts.push(match (t.stopped, t.claim.kind) {
                 (Some(v), _) => v,
                 (None, ClaimKind::DimensionalConsistency) => {
