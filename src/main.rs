@@ -23,6 +23,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run a .lagra scene and certify its @expect claims with interval arithmetic.
+    #[command(after_help = "Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or \
+was UNDECIDED, a prediction disagreed or could not be measured, or the run halted (a singular force, a non-finite \
+state); 2 bad input (the scene, a file, an argument).")]
     Run(run::Args),
 }
 

@@ -18,7 +18,6 @@ pub struct TermCount {
 
 #[derive(Serialize)]
 pub struct ClaimLine {
-    pub claim: &'static str,
     pub line: String,
     #[serde(flatten)]
     pub verdict: Verdict,
@@ -65,7 +64,7 @@ impl Summary {
             .map(|(v, c)| {
                 let dissipators =
                     if c.kind == lagra_checker::claims::ClaimKind::EnergyConservation { &balance[..] } else { &[] };
-                ClaimLine { claim: c.kind.name(), line: line(v, dissipators, c.tol.is_some()), verdict: v.clone() }
+                ClaimLine { line: line(v, dissipators, c.tol.is_some()), verdict: v.clone() }
             })
             .collect();
         let halted = r.stop.as_ref().map(|s| match s {

@@ -226,4 +226,6 @@ fn json_report_has_the_timing_fields() {
     for k in ["wall_s", "steps_per_s", "ns_per_atom_step"] {
         assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
     }
+    // one "claim" key per verdict: a flattened field must not repeat a key
+    assert_eq!(stdout(&o).matches("\"claim\"").count(), v["claims"].as_array().unwrap().len());
 }
