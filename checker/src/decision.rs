@@ -7,8 +7,36 @@
 //! `Pass` has private fields and no constructor outside this module (LCF style).
 
 use crate::claims::ClaimKind;
-use inari::Interval;
 use serde::Serialize;
+
+/// Where an enclosure `[lo, hi]` of a deviation lies against its tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Class {
+    /// hi ≤ tol: every enclosed value is within tolerance.
+    Within,
+    /// lo > tol: every enclosed value breaks it.
+    Beyond,
+    /// Neither, or the enclosure or tolerance is not a number: undecided.
+    Straddles,
+}
+
+/// The one comparison every verdict rests on. NaN anywhere is `Straddles`, never `Within`.
+pub fn classify(lo: f64, hi: f64, tol: f64) -> Class {
+    if lo.is_nan() || hi.is_nan() || tol.is_nan() || lo > hi || tol < 0.0 || tol == f64::INFINITY {
+        Class::Straddles
+    } else if hi <= tol {
+        Class::Within
+    } else if lo > tol {
+        Class::Beyond
+    } else {
+        Class::Straddles
+    }
+}
+
+/// The binary precision of the arithmetic that decided a checkpoint: 53 for binary64
+/// intervals, more for MPFR intervals.
+pub type Precision = u32;
+pub const BINARY64: Precision = 53;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Pass {
@@ -18,6 +46,8 @@ pub struct Pass {
     /// The largest tolerance any checkpoint was held to.
     tol: f64,
     checkpoints: u64,
+    /// The highest precision any checkpoint needed to be decided.
+    precision: Precision,
 }
 
 impl Pass {
@@ -33,6 +63,9 @@ impl Pass {
     pub fn checkpoints(&self) -> u64 {
         self.checkpoints
     }
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
 }
 
 /// A checkpoint where the deviation is certainly (`Fail`) or possibly (`Undecided`) too large.
@@ -43,6 +76,7 @@ pub struct Breach {
     pub lower: f64,
     pub upper: f64,
     pub tol: f64,
+    pub precision: Precision,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -77,28 +111,30 @@ pub struct Judge {
     checkpoints: u64,
     bound: f64,
     tol: f64,
+    precision: Precision,
     undecided: Option<Breach>,
 }
 
 impl Judge {
     pub fn new(claim: ClaimKind) -> Self {
-        Judge { claim, checkpoints: 0, bound: 0.0, tol: 0.0, undecided: None }
+        Judge { claim, checkpoints: 0, bound: 0.0, tol: 0.0, precision: BINARY64, undecided: None }
     }
 
-    /// Admits one checkpoint. `deviation` encloses a non-negative quantity that must be ≤ `tol`.
-    pub fn admit(&mut self, step: u64, deviation: Interval, tol: f64) -> Result<(), Breach> {
+    /// Admits one checkpoint: `[lo, hi]` encloses the deviation, which must be ≤ `tol`;
+    /// `precision` is that of the arithmetic that produced the enclosure.
+    pub fn admit(&mut self, step: u64, (lo, hi): (f64, f64), tol: f64, precision: Precision) -> Result<(), Breach> {
         self.checkpoints += 1;
-        let breach = Breach { claim: self.claim, step, lower: deviation.inf(), upper: deviation.sup(), tol };
-        // An empty enclosure means the evaluation itself went wrong: never a PASS.
-        if deviation.is_empty() || !tol.is_finite() || tol < 0.0 {
-            self.undecided.get_or_insert(Breach { lower: f64::NAN, upper: f64::NAN, ..breach });
-        } else if breach.lower > tol {
-            return Err(breach);
-        } else if breach.upper > tol || breach.upper.is_nan() {
-            self.undecided.get_or_insert(breach);
-        } else {
-            self.bound = self.bound.max(breach.upper);
-            self.tol = self.tol.max(tol);
+        let breach = Breach { claim: self.claim, step, lower: lo, upper: hi, tol, precision };
+        match classify(lo, hi, tol) {
+            Class::Beyond => return Err(breach),
+            Class::Straddles => {
+                self.undecided.get_or_insert(breach);
+            }
+            Class::Within => {
+                self.bound = self.bound.max(hi);
+                self.tol = self.tol.max(tol);
+                self.precision = self.precision.max(precision);
+            }
         }
         Ok(())
     }
@@ -112,12 +148,14 @@ impl Judge {
                 lower: f64::NAN,
                 upper: f64::NAN,
                 tol: self.tol,
+                precision: self.precision,
             }),
             None => Verdict::Pass(Pass {
                 claim: self.claim,
                 bound: self.bound,
                 tol: self.tol,
                 checkpoints: self.checkpoints,
+                precision: self.precision,
             }),
         }
     }
@@ -126,7 +164,7 @@ impl Judge {
 /// A claim about the model alone: it passes with zero deviation or is refuted with a reason.
 pub fn decide_static(claim: ClaimKind, holds: Result<(), String>) -> Verdict {
     match holds {
-        Ok(()) => Verdict::Pass(Pass { claim, bound: 0.0, tol: 0.0, checkpoints: 0 }),
+        Ok(()) => Verdict::Pass(Pass { claim, bound: 0.0, tol: 0.0, checkpoints: 0, precision: BINARY64 }),
         Err(reason) => Verdict::Refuted { claim, reason },
     }
 }
@@ -135,15 +173,15 @@ pub fn decide_static(claim: ClaimKind, holds: Result<(), String>) -> Verdict {
 mod tests {
     use super::*;
 
-    fn iv(a: f64, b: f64) -> Interval {
-        Interval::try_from((a, b)).unwrap()
+    fn iv(a: f64, b: f64) -> (f64, f64) {
+        (a, b)
     }
 
     #[test]
     fn inside_passes_with_the_largest_upper_bound() {
         let mut j = Judge::new(ClaimKind::EnergyConservation);
-        j.admit(1, iv(0.0, 1e-7), 1e-5).unwrap();
-        j.admit(2, iv(1e-7, 3e-7), 1e-5).unwrap();
+        j.admit(1, iv(0.0, 1e-7), 1e-5, BINARY64).unwrap();
+        j.admit(2, iv(1e-7, 3e-7), 1e-5, BINARY64).unwrap();
         let Verdict::Pass(p) = j.finish() else { panic!("expected PASS") };
         assert_eq!((p.bound(), p.checkpoints()), (3e-7, 2));
     }
@@ -151,30 +189,49 @@ mod tests {
     #[test]
     fn wholly_above_fails_at_that_step() {
         let mut j = Judge::new(ClaimKind::EnergyConservation);
-        let b = j.admit(7, iv(2e-5, 3e-5), 1e-5).unwrap_err();
+        let b = j.admit(7, iv(2e-5, 3e-5), 1e-5, BINARY64).unwrap_err();
         assert_eq!((b.step, b.lower), (7, 2e-5));
     }
 
     #[test]
     fn straddling_is_undecided_never_pass() {
         let mut j = Judge::new(ClaimKind::EnergyConservation);
-        j.admit(3, iv(0.5e-5, 2e-5), 1e-5).unwrap();
-        j.admit(4, iv(0.0, 1e-9), 1e-5).unwrap();
+        j.admit(3, iv(0.5e-5, 2e-5), 1e-5, BINARY64).unwrap();
+        j.admit(4, iv(0.0, 1e-9), 1e-5, 256).unwrap();
         assert!(matches!(j.finish(), Verdict::Undecided(Breach { step: 3, .. })));
     }
 
     #[test]
     fn empty_enclosure_or_no_checkpoint_is_never_pass() {
         let mut j = Judge::new(ClaimKind::MomentumConservation);
-        j.admit(1, Interval::EMPTY, 1.0).unwrap();
+        j.admit(1, (f64::NAN, f64::NAN), 1.0, BINARY64).unwrap();
         assert!(!j.finish().is_pass());
         assert!(!Judge::new(ClaimKind::MomentumConservation).finish().is_pass());
     }
 
     #[test]
+    fn the_highest_deciding_precision_is_reported() {
+        let mut j = Judge::new(ClaimKind::EnergyConservation);
+        j.admit(1, iv(0.0, 1e-7), 1e-5, BINARY64).unwrap();
+        j.admit(2, iv(0.0, 1e-7), 1e-5, 256).unwrap();
+        let Verdict::Pass(p) = j.finish() else { panic!("expected PASS") };
+        assert_eq!(p.precision(), 256);
+    }
+
+    #[test]
+    fn classify_never_calls_nan_within() {
+        for (lo, hi, tol) in [(f64::NAN, 0.0, 1.0), (0.0, f64::NAN, 1.0), (0.0, 0.0, f64::NAN), (1.0, 0.0, 2.0)] {
+            assert_eq!(classify(lo, hi, tol), Class::Straddles);
+        }
+        assert_eq!(classify(0.0, 1.0, 1.0), Class::Within);
+        assert_eq!(classify(1.0, 2.0, 1.0), Class::Straddles);
+        assert_eq!(classify(1.5, 2.0, 1.0), Class::Beyond);
+    }
+
+    #[test]
     fn nan_tolerance_is_never_pass() {
         let mut j = Judge::new(ClaimKind::MomentumConservation);
-        j.admit(1, iv(0.0, 0.0), f64::NAN).unwrap();
+        j.admit(1, iv(0.0, 0.0), f64::NAN, BINARY64).unwrap();
         assert!(!j.finish().is_pass());
     }
 }

@@ -7,8 +7,10 @@
 
 pub mod claims;
 pub mod decision;
+pub mod enclosure;
 pub mod model;
 pub mod monitor;
+pub mod mpfi;
 pub mod quantities;
 pub mod real;
 pub mod render;

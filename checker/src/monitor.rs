@@ -1,14 +1,18 @@
 //! The checker's side of a run: it is handed exact states, evaluates each declared claim's
-//! quantity on them with interval arithmetic, and feeds the enclosures to the decision.
+//! quantity on them with interval arithmetic, and feeds the enclosures to the decision. A
+//! checkpoint that binary64 intervals cannot decide is re-evaluated with MPFR intervals at rising
+//! precision, up to a cap, before it is left undecided.
 
 use crate::claims::{Claim, ClaimKind};
-use crate::decision::{decide_static, Breach, Judge, Verdict};
+use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, Verdict, BINARY64};
+use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
+use crate::mpfi::Mpfi;
 use crate::quantities::Lifted;
 use crate::real::point;
 use crate::terms::Kind;
 use inari::Interval;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Unit round-off of binary64.
 const U: f64 = f64::EPSILON / 2.0;
@@ -16,6 +20,8 @@ const U: f64 = f64::EPSILON / 2.0;
 /// without a tolerance: velocity Verlet conserves both exactly in exact arithmetic, so only
 /// rounding can move them, by about 2u·Σm|v| per step; the budget leaves a factor 8 of margin.
 const ROUNDOFF_BUDGET: f64 = 16.0 * U;
+/// The MPFR precisions tried, in order, on a checkpoint binary64 intervals leave undecided.
+pub const ESCALATION: [Precision; 4] = [128, 256, 512, 1024];
 
 /// Why a run must stop.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,33 +32,58 @@ pub enum Halt {
     InvalidState(String),
 }
 
-/// One checkpoint's enclosure of a claim's deviation.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, and the precision that
+/// produced it. Written as `[step, lo, hi, precision]`; the endpoints as exact binary64 JSON
+/// numbers, the infinities as the strings "inf" and "-inf", an empty enclosure as "nan".
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "MarkRepr", try_from = "MarkRepr")]
 pub struct Mark {
     pub step: u64,
-    pub deviation: Interval,
+    pub lo: f64,
+    pub hi: f64,
+    pub precision: Precision,
 }
 
-impl Serialize for Mark {
-    /// `[step, lo, hi]`; the endpoints round-trip exactly (finite values as JSON numbers
-    /// with serde_json's float_roundtrip, the infinities as the strings "inf"/"-inf").
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeTuple;
-        let exact = |x: f64| match x {
-            x if x.is_finite() => serde_json::json!(x),
-            x if x > 0.0 => serde_json::json!("inf"),
-            x if x < 0.0 => serde_json::json!("-inf"),
-            _ => serde_json::json!("nan"),
+#[derive(Serialize, Deserialize)]
+struct MarkRepr(u64, Exact, Exact, Precision);
+
+/// A binary64 value that survives JSON: finite values as numbers, the rest as strings.
+#[derive(Serialize, Deserialize)]
+#[serde(untagged)]
+enum Exact {
+    Finite(f64),
+    Special(String),
+}
+
+impl From<Mark> for MarkRepr {
+    fn from(m: Mark) -> Self {
+        let e = |x: f64| match x {
+            x if x.is_finite() => Exact::Finite(x),
+            x if x > 0.0 => Exact::Special("inf".into()),
+            x if x < 0.0 => Exact::Special("-inf".into()),
+            _ => Exact::Special("nan".into()),
         };
-        let mut t = s.serialize_tuple(3)?;
-        t.serialize_element(&self.step)?;
-        t.serialize_element(&exact(self.deviation.inf()))?;
-        t.serialize_element(&exact(self.deviation.sup()))?;
-        t.end()
+        MarkRepr(m.step, e(m.lo), e(m.hi), m.precision)
     }
 }
 
-#[derive(Clone, Debug, Serialize)]
+impl TryFrom<MarkRepr> for Mark {
+    type Error = String;
+    fn try_from(r: MarkRepr) -> Result<Self, String> {
+        let e = |x: Exact| match x {
+            Exact::Finite(x) => Ok(x),
+            Exact::Special(s) => match s.as_str() {
+                "inf" => Ok(f64::INFINITY),
+                "-inf" => Ok(f64::NEG_INFINITY),
+                "nan" => Ok(f64::NAN),
+                _ => Err(format!("`{s}` is not a binary64 value")),
+            },
+        };
+        Ok(Mark { step: r.0, lo: e(r.1)?, hi: e(r.2)?, precision: r.3 })
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Trail {
     pub claim: ClaimKind,
     pub marks: Vec<Mark>,
@@ -73,10 +104,13 @@ struct Track {
     stopped: Option<Verdict>,
 }
 
+/// The state at step 0, kept whole so that it can be re-evaluated at any precision, and the
+/// claimed quantities on it in binary64 intervals.
 struct Reference {
-    energy: Interval,
-    momentum: [Interval; 3],
-    angular: [Interval; 3],
+    t: f64,
+    x: Vec<[f64; 3]>,
+    v: Vec<[f64; 3]>,
+    measures: Vec<(ClaimKind, Vec<Interval>)>,
 }
 
 pub struct Monitor {
@@ -95,6 +129,28 @@ pub struct Outcome {
     pub trails: Vec<Trail>,
     /// Dissipative terms that removed energy (the energy claim was then a balance).
     pub dissipators: Vec<Kind>,
+}
+
+/// The quantity a dynamic claim is about.
+fn measure<E: Enclosure>(kind: ClaimKind, q: &Lifted<E>, model: &Model) -> Vec<E> {
+    match kind {
+        ClaimKind::EnergyConservation => vec![q.energy(model)],
+        ClaimKind::MomentumConservation => q.momentum().to_vec(),
+        ClaimKind::AngularMomentumConservation => q.angular_momentum().to_vec(),
+        ClaimKind::DimensionalConsistency => vec![],
+    }
+}
+
+/// How far it has moved from its reference value: |H + Q − H₀|/|H₀| for energy, the largest
+/// component of |X − X₀| for the momenta.
+fn deviation<E: Enclosure>(kind: ClaimKind, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
+    match kind {
+        ClaimKind::EnergyConservation => {
+            let h0 = reference[0].clone();
+            (now[0].clone() + dissipated - h0.clone()).abs() / h0.abs()
+        }
+        _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("3 components"),
+    }
 }
 
 impl Monitor {
@@ -140,8 +196,9 @@ impl Monitor {
             if self.balance {
                 self.ledger = Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: point(0.0) });
             }
-            self.reference =
-                Some(Reference { energy: q.energy(model), momentum: q.momentum(), angular: q.angular_momentum() });
+            let kinds = self.tracks.iter().map(|t| t.claim.kind).filter(|k| k.is_dynamic());
+            let measures = kinds.map(|k| (k, measure(k, &q, model))).collect();
+            self.reference = Some(Reference { t: s.t, x: s.x.to_vec(), v: s.v.to_vec(), measures });
             return Ok(());
         };
         if let Some(l) = &mut self.ledger {
@@ -151,23 +208,26 @@ impl Monitor {
         }
         let dissipated = self.ledger.as_ref().map_or(point(0.0), |l| l.dissipated);
         for t in self.tracks.iter_mut().filter(|t| due(t)) {
-            let (deviation, tol) = match t.claim.kind {
-                ClaimKind::EnergyConservation => {
-                    let balance = q.energy(model) + dissipated;
-                    ((balance - r.energy).abs() / r.energy.abs(), t.claim.tol.unwrap_or(f64::NAN))
-                }
+            let kind = t.claim.kind;
+            let tol = match kind {
+                ClaimKind::EnergyConservation => t.claim.tol.unwrap_or(f64::NAN),
                 ClaimKind::MomentumConservation => {
                     t.scale = t.scale.max(weighted_speed(model, s, |_| point(1.0)));
-                    (worst(q.momentum(), r.momentum), budget(t, s.step))
+                    budget(t, s.step)
                 }
-                ClaimKind::AngularMomentumConservation => {
+                _ => {
                     t.scale = t.scale.max(weighted_speed(model, s, norm1));
-                    (worst(q.angular_momentum(), r.angular), budget(t, s.step))
+                    budget(t, s.step)
                 }
-                ClaimKind::DimensionalConsistency => continue,
             };
-            t.marks.push(Mark { step: s.step, deviation });
-            if let Err(b) = t.judge.admit(s.step, deviation, tol) {
+            let reference = r.measures.iter().find(|m| m.0 == kind).map(|m| m.1.clone()).unwrap_or_default();
+            let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, precision: BINARY64 };
+            (mark.lo, mark.hi) = deviation(kind, measure(kind, &q, model), reference, dissipated).bounds();
+            if classify(mark.lo, mark.hi, tol) == Class::Straddles {
+                mark = escalate(model, r, s, kind, dissipated, tol);
+            }
+            t.marks.push(mark);
+            if let Err(b) = t.judge.admit(s.step, (mark.lo, mark.hi), tol, mark.precision) {
                 t.stopped = Some(Verdict::Fail(b.clone()));
                 return Err(Halt::Breach(b));
             }
@@ -201,14 +261,36 @@ impl Monitor {
     }
 }
 
+/// Re-evaluates one checkpoint with MPFR intervals at rising precision: the first enclosure
+/// that decides, or the one at the cap. The dissipated energy, integrated in binary64
+/// intervals, enters as it is.
+fn escalate(model: &Model, r: &Reference, s: &Snapshot, kind: ClaimKind, q: Interval, tol: f64) -> Mark {
+    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v };
+    let at = |precision: Precision| {
+        let proto = Mpfi::point(precision, 0.0);
+        let now = measure(kind, &Lifted::new(model, s, &proto), model);
+        let then = measure(kind, &Lifted::new(model, &r0, &proto), model);
+        let (lo, hi) = deviation(kind, now, then, Mpfi::from_interval(precision, q)).bounds();
+        Mark { step: s.step, lo, hi, precision }
+    };
+    let mut mark = at(ESCALATION[0]);
+    for &p in &ESCALATION[1..] {
+        if classify(mark.lo, mark.hi, tol) != Class::Straddles {
+            break;
+        }
+        mark = at(p);
+    }
+    mark
+}
+
 /// Every term kind in the model has a homogeneous, energy-valued definition.
 fn dimensions(model: &Model) -> Result<(), String> {
     model.terms.iter().try_for_each(|t| t.kind.check_dimensions())
 }
 
-/// max over components of |a − b|.
-fn worst(a: [Interval; 3], b: [Interval; 3]) -> Interval {
-    (0..3).map(|c| (a[c] - b[c]).abs()).fold(point(0.0), |m, d| m.max(d))
+/// |a|₁ as an interval.
+fn norm1(a: &[f64; 3]) -> Interval {
+    a.iter().fold(point(0.0), |s, &c| s + point(c).abs())
 }
 
 /// Upper bound of Σ m·w(x)·|v|₁, the scale that round-off in Σmv (w = 1) or Σm x×v (w = |x|₁)
@@ -216,15 +298,9 @@ fn worst(a: [Interval; 3], b: [Interval; 3]) -> Interval {
 fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Interval) -> f64 {
     let mut sum = point(0.0);
     for (b, (x, v)) in model.bodies.iter().zip(s.x.iter().zip(s.v)) {
-        let speed = norm1(v);
-        sum += point(b.mass) * w(x) * speed;
+        sum += point(b.mass) * w(x) * norm1(v);
     }
     sum.sup()
-}
-
-/// |a|₁ as an interval.
-fn norm1(a: &[f64; 3]) -> Interval {
-    a.iter().fold(point(0.0), |s, &c| s + point(c).abs())
 }
 
 /// The declared tolerance, or the round-off budget after `step` steps.
@@ -319,6 +395,63 @@ mod tests {
         // The trapezoid saw power 1 then 0: Q = ½, so H + Q = H₀ holds exactly.
         assert_eq!(err, Ok(()));
         assert_eq!(m.finish().dissipators, [Kind::HarmonicBond]);
+    }
+
+    /// One body falling at 1414 units/s, 10⁵ units down: H = T + V ≈ 10⁶ − 10⁶ ≈ −1, so a
+    /// binary64 enclosure of H is about 10⁻¹⁰·|H| wide.
+    fn cancelling() -> (Model, [[f64; 3]; 1], [[f64; 3]; 1]) {
+        let model = Model {
+            units: UnitSystem::Reduced,
+            bodies: vec![Body { mass: 1.0, charge: 0.0 }],
+            terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
+        };
+        (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])
+    }
+
+    #[test]
+    fn binary64_intervals_cannot_decide_but_mpfr_can() {
+        let (model, x, v) = cancelling();
+        let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
+        for step in 0..=1 {
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+        }
+        let out = m.finish();
+        let Verdict::Pass(p) = &out.verdicts[0] else { panic!("{:?}", out.verdicts[0]) };
+        assert_eq!(p.precision(), 128);
+        // and binary64 intervals alone really could not: their enclosure straddles 1e-12
+        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Interval::EMPTY);
+        let h = q.energy(&cancelling().0);
+        let (lo, hi) = deviation(ClaimKind::EnergyConservation, vec![h], vec![h], point(0.0)).bounds();
+        assert_eq!(classify(lo, hi, 1e-12), Class::Straddles, "[{lo}, {hi}]");
+    }
+
+    #[test]
+    fn a_claim_no_precision_can_decide_is_undecided_at_the_cap() {
+        // At rest with no potential, H₀ = 0: a relative tolerance has nothing to be relative to.
+        let model = Model { terms: vec![], ..cancelling().0 };
+        let (x, v) = ([[1.0, 2.0, 3.0]], [[0.0; 3]]);
+        let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-3), 1)], 1).unwrap();
+        for step in 0..=1 {
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+        }
+        let out = m.finish();
+        assert!(matches!(out.verdicts[0], Verdict::Undecided(Breach { precision: 1024, .. })), "{:?}", out.verdicts[0]);
+        assert_eq!(out.trails[0].marks[0].precision, 1024);
+    }
+
+    #[test]
+    fn marks_round_trip_through_json_exactly() {
+        let marks = [
+            Mark { step: 3, lo: 1.0000000000000002e-300, hi: f64::INFINITY, precision: 53 },
+            Mark { step: 4, lo: f64::NEG_INFINITY, hi: 4.9e-324, precision: 1024 },
+        ];
+        let text = serde_json::to_string(&marks).unwrap();
+        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",53],[4,"-inf",5e-324,1024]]"#);
+        let back: Vec<Mark> = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, marks);
+        let nan: Mark = serde_json::from_str(r#"[1,"nan","nan",53]"#).unwrap();
+        assert!(nan.lo.is_nan());
+        assert!(serde_json::from_str::<Mark>(r#"[1,"zero",0,53]"#).is_err());
     }
 
     #[test]

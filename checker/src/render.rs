@@ -1,7 +1,7 @@
 //! Verdicts as one line of text each; `lagra run` and a re-check print the same lines.
 
 use crate::claims::ClaimKind;
-use crate::decision::Verdict;
+use crate::decision::{Precision, Verdict, BINARY64};
 
 /// `x` in scientific notation with a two-digit exponent (`1e-05`), exactly as given.
 pub fn sci(x: f64) -> String {
@@ -12,6 +12,15 @@ pub fn sci(x: f64) -> String {
     let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
     let e: i32 = e.parse().unwrap_or(0);
     format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.unsigned_abs())
+}
+
+/// `interval` for binary64 intervals, `mpfr N` for MPFR intervals of N bits.
+pub fn method(p: Precision) -> String {
+    if p == BINARY64 {
+        "interval".into()
+    } else {
+        format!("mpfr {p}")
+    }
 }
 
 /// `x` with two significant digits, rounded *up*, so a printed bound is still a bound.
@@ -60,8 +69,9 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             format!("{name} PASS  every term is homogeneous and energy-valued")
         }
         Verdict::Pass(p) => format!(
-            "{name} PASS  max{q} ≤ {} certified over {} checkpoints ({}{via})",
+            "{name} PASS  max{q} ≤ {} certified ({}) over {} checkpoints ({}{via})",
             up(p.bound()),
+            method(p.precision()),
             p.checkpoints(),
             tol(p.tol())
         ),
@@ -72,11 +82,12 @@ pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             format!("{name} UNDECIDED  at step {}: the quantity could not be enclosed", b.step)
         }
         Verdict::Undecided(b) => format!(
-            "{name} UNDECIDED  at step {}: {q} ∈ [{}, {}] straddles {}{via}",
+            "{name} UNDECIDED  at step {}: {q} ∈ [{}, {}] straddles {}{via}, even at {}",
             b.step,
             sci(b.lower),
             up(b.upper),
-            tol(b.tol)
+            tol(b.tol),
+            method(b.precision)
         ),
         Verdict::Refuted { reason, .. } => format!("{name} FAIL  {reason}"),
     }
