@@ -1,6 +1,6 @@
 //! `lagra`: run a scene and certify its claims.
 
-mod certificate;
+mod check;
 mod report;
 mod run;
 
@@ -27,10 +27,16 @@ enum Command {
 was UNDECIDED, a prediction disagreed or could not be measured, or the run halted (a singular force, a non-finite \
 state); 2 bad input (the scene, a file, an argument).")]
     Run(run::Args),
+    /// Re-check a certificate without the kernel (the same code and output as `lagra-check`),
+    /// and with --scene, check that it certifies that scene.
+    #[command(after_help = "Exit status: 0 the re-check agrees and every claim PASSed; 1 it disagrees, a claim \
+did not PASS, or the certificate is not of the scene given; 2 a file is missing, malformed or does not fit.")]
+    Check(check::Args),
 }
 
 fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Run(args) => run::main(args),
+        Command::Check(args) => check::main(args),
     }
 }

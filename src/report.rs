@@ -3,7 +3,7 @@
 use lagra_checker::decision::Verdict;
 use lagra_checker::model::UnitSystem;
 use lagra_checker::monitor::Halt;
-use lagra_checker::render::{line, sci, up};
+use lagra_checker::render::{lines, sci, up};
 use lagra_kernel::run::{Measured, Report, Stop};
 use lagra_kernel::scene::Scene;
 use serde::Serialize;
@@ -55,18 +55,9 @@ impl Summary {
                 None => terms.push(TermCount { kind: t.kind.name(), count: 1, dissipative: t.kind.dissipative() }),
             }
         }
-        let balance: Vec<&str> = r.outcome.dissipators.iter().map(|k| k.name()).collect();
-        let claims: Vec<ClaimLine> = r
-            .outcome
-            .verdicts
-            .iter()
-            .zip(&scene.claims)
-            .map(|(v, c)| {
-                let dissipators =
-                    if c.kind == lagra_checker::claims::ClaimKind::EnergyConservation { &balance[..] } else { &[] };
-                ClaimLine { line: line(v, dissipators, c.tol.is_some()), verdict: v.clone() }
-            })
-            .collect();
+        let lines = lines(&r.outcome.verdicts, &scene.claims, &r.outcome.dissipators);
+        let claims: Vec<ClaimLine> =
+            r.outcome.verdicts.iter().zip(lines).map(|(v, line)| ClaimLine { line, verdict: v.clone() }).collect();
         let halted = r.stop.as_ref().map(|s| match s {
             Stop::Checker(Halt::Breach(b)) => {
                 format!("halted at step {}: {} is certainly violated", b.step, b.claim.name())

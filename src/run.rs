@@ -1,8 +1,13 @@
 //! `lagra run FILE`.
 
-use crate::{certificate, report};
+use crate::report;
+use lagra_checker::certificate::{self, Certificate};
+use lagra_checker::checksum::label;
+use lagra_checker::model::Snapshot;
+use lagra_checker::states::StateWriter;
 use lagra_kernel::lang::compile;
 use lagra_kernel::run::{run, Options};
+use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
@@ -19,9 +24,12 @@ pub struct Args {
     #[arg(long, value_name = "FILE.jsonl")]
     trace: Option<PathBuf>,
     /// Write the certificate: scene digest, canonical graph, claims, per-checkpoint
-    /// enclosures, verdicts.
+    /// enclosures, verdicts (re-check it with `lagra check` or `lagra-check`).
     #[arg(long, value_name = "FILE")]
     certificate: Option<PathBuf>,
+    /// Write every state the checker saw, exactly, so a re-check can evaluate every claim again.
+    #[arg(long, value_name = "FILE")]
+    states: Option<PathBuf>,
     /// Run this many steps instead of the scene's own run length.
     #[arg(long, value_name = "N")]
     steps: Option<u64>,
@@ -53,16 +61,56 @@ pub fn main(a: Args) -> ExitCode {
         Ok(f) => f.map(BufWriter::new),
         Err(e) => return bad(format!("cannot create the trace file: {e}")),
     };
-    let result = run(&scene, Options { steps: a.steps, trace: trace.as_mut().map(|w| w as &mut dyn Write) });
+    let mut states = match a
+        .states
+        .as_ref()
+        .map(|p| File::create(p).and_then(|f| StateWriter::new(BufWriter::new(f), scene.x0.len())))
+        .transpose()
+    {
+        Ok(w) => w,
+        Err(e) => return bad(format!("cannot create the state file: {e}")),
+    };
+    let mut record = recorder(|s| states.as_mut().map_or(Ok(()), |w| w.push(s)));
+    let result = run(
+        &scene,
+        Options {
+            steps: a.steps,
+            trace: trace.as_mut().map(|w| w as &mut dyn Write),
+            record: a.states.is_some().then_some(&mut record),
+        },
+    );
     let flushed = trace.map(|mut t| t.flush()).transpose();
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,
         (Err(e), _) => return bad(e),
         (_, Err(e)) => return bad(format!("writing the trace: {e}")),
     };
+    let states_checksum = match states.map(StateWriter::finish).transpose() {
+        Ok(sum) => sum.map(label),
+        Err(e) => return bad(format!("writing the state file: {e}")),
+    };
     let summary = report::Summary::new(&path, &scene, &rep);
     if let Some(c) = &a.certificate {
-        if let Err(e) = certificate::write(c, &source, &scene, &rep, &summary) {
+        let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+        let cert = Certificate {
+            format: certificate::FORMAT.into(),
+            scene: scene.name.clone(),
+            source_digest: format!("sha256:{digest}"),
+            model: scene.model.clone(),
+            claims: scene.claims.clone(),
+            run: certificate::Run {
+                integrator: scene.solver.integrator.name().into(),
+                dt: scene.solver.dt,
+                planned_steps: rep.planned_steps,
+                steps: rep.steps,
+            },
+            trails: rep.outcome.trails.clone(),
+            verdicts: summary.claims.iter().map(|c| c.line.clone()).collect(),
+            states_checksum,
+            checksum: String::new(),
+        }
+        .seal();
+        if let Err(e) = std::fs::write(c, cert.to_json() + "\n") {
             return bad(format!("cannot write the certificate {}: {e}", c.display()));
         }
     }
@@ -76,4 +124,9 @@ pub fn main(a: Args) -> ExitCode {
     } else {
         ExitCode::from(1)
     }
+}
+
+/// Pins a closure to the signature `Options::record` takes (for every lifetime of the snapshot).
+fn recorder<F: FnMut(&Snapshot) -> std::io::Result<()>>(f: F) -> F {
+    f
 }

@@ -182,8 +182,9 @@ fn certificate_holds_the_model_the_claims_and_every_checkpoint() {
     let o = lagra(&["run", "scenes/oscillator.lagra", "--certificate", c.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0));
     let v: Value = serde_json::from_slice(&std::fs::read(&c).unwrap()).unwrap();
-    assert_eq!(v["format"], "lagra-certificate/0");
-    assert!(v["digest"].as_str().unwrap().starts_with("sha256:"));
+    assert_eq!(v["format"], "lagra-certificate/1");
+    assert!(v["source_digest"].as_str().unwrap().starts_with("sha256:"));
+    assert!(v["checksum"].as_str().unwrap().starts_with("fnv1a64:"));
     assert_eq!(v["model"]["terms"][0]["kind"], "HarmonicBond");
     assert_eq!(v["model"]["terms"][0]["params"], serde_json::json!([2.0, 2.0, 0.04]));
     let trails = v["trails"].as_array().unwrap();
@@ -192,7 +193,9 @@ fn certificate_holds_the_model_the_claims_and_every_checkpoint() {
         let marks = t["marks"].as_array().unwrap();
         assert_eq!(marks.len(), 5000);
         assert_eq!(marks[4999][0], 5000);
+        // [step, lo, hi, tol, precision]: lo ≤ hi ≤ tol, decided by binary64 intervals
         assert!(marks.iter().all(|m| m[1].as_f64().unwrap() <= m[2].as_f64().unwrap()));
+        assert!(marks.iter().all(|m| m[2].as_f64().unwrap() <= m[3].as_f64().unwrap() && m[4] == 53));
     }
     assert!(v["verdicts"][1].as_str().unwrap().starts_with("energy_conservation PASS"));
 }

@@ -60,6 +60,7 @@ impl ClaimKind {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Claim {
     pub kind: ClaimKind,
     pub tol: Option<f64>,

@@ -5,7 +5,12 @@
 //! enclosures into PASS or FAIL. It depends on no other crate of the project: the code that did
 //! the arithmetic is not the code that signs off on it.
 
+#![forbid(unsafe_code)]
+
+pub mod certificate;
+pub mod checksum;
 pub mod claims;
+pub mod cli;
 pub mod decision;
 pub mod enclosure;
 pub mod model;
@@ -13,6 +18,8 @@ pub mod monitor;
 pub mod mpfi;
 pub mod quantities;
 pub mod real;
+pub mod recheck;
 pub mod render;
+pub mod states;
 pub mod terms;
 pub mod units;

@@ -15,12 +15,14 @@ pub enum UnitSystem {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Body {
     pub mass: f64,
     pub charge: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TermInstance {
     pub kind: Kind,
     /// Body indices for a bond; empty for pairwise and external terms (they act on all bodies).
@@ -30,6 +32,7 @@ pub struct TermInstance {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Model {
     pub units: UnitSystem,
     pub bodies: Vec<Body>,

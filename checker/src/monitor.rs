@@ -32,8 +32,9 @@ pub enum Halt {
     InvalidState(String),
 }
 
-/// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, and the precision that
-/// produced it. Written as `[step, lo, hi, precision]`; the endpoints as exact binary64 JSON
+/// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, the tolerance it was held to
+/// (declared, or the round-off budget at that step) and the precision that produced the
+/// enclosure. Written as `[step, lo, hi, tol, precision]`; the numbers as exact binary64 JSON
 /// numbers, the infinities as the strings "inf" and "-inf", an empty enclosure as "nan".
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(into = "MarkRepr", try_from = "MarkRepr")]
@@ -41,11 +42,20 @@ pub struct Mark {
     pub step: u64,
     pub lo: f64,
     pub hi: f64,
+    pub tol: f64,
     pub precision: Precision,
 }
 
+impl Mark {
+    /// Equal to the last bit, NaN included.
+    pub fn same(&self, o: &Mark) -> bool {
+        let bits = |m: &Mark| (m.step, m.lo.to_bits(), m.hi.to_bits(), m.tol.to_bits(), m.precision);
+        bits(self) == bits(o)
+    }
+}
+
 #[derive(Serialize, Deserialize)]
-struct MarkRepr(u64, Exact, Exact, Precision);
+struct MarkRepr(u64, Exact, Exact, Exact, Precision);
 
 /// A binary64 value that survives JSON: finite values as numbers, the rest as strings.
 #[derive(Serialize, Deserialize)]
@@ -63,7 +73,7 @@ impl From<Mark> for MarkRepr {
             x if x < 0.0 => Exact::Special("-inf".into()),
             _ => Exact::Special("nan".into()),
         };
-        MarkRepr(m.step, e(m.lo), e(m.hi), m.precision)
+        MarkRepr(m.step, e(m.lo), e(m.hi), e(m.tol), m.precision)
     }
 }
 
@@ -79,7 +89,7 @@ impl TryFrom<MarkRepr> for Mark {
                 _ => Err(format!("`{s}` is not a binary64 value")),
             },
         };
-        Ok(Mark { step: r.0, lo: e(r.1)?, hi: e(r.2)?, precision: r.3 })
+        Ok(Mark { step: r.0, lo: e(r.1)?, hi: e(r.2)?, tol: e(r.3)?, precision: r.4 })
     }
 }
 
@@ -164,8 +174,7 @@ impl Monitor {
                 return Err(format!("{}: every must be at least 1", c.kind.name()));
             }
         }
-        let balance = claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation)
-            && model.terms.iter().any(|t| t.kind.dissipative());
+        let balance = is_balance(&model, &claims);
         let tracks = claims
             .into_iter()
             .map(|claim| Track { judge: Judge::new(claim.kind), claim, marks: vec![], scale: 0.0, stopped: None })
@@ -221,7 +230,7 @@ impl Monitor {
                 }
             };
             let reference = r.measures.iter().find(|m| m.0 == kind).map(|m| m.1.clone()).unwrap_or_default();
-            let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, precision: BINARY64 };
+            let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision: BINARY64 };
             (mark.lo, mark.hi) = deviation(kind, measure(kind, &q, model), reference, dissipated).bounds();
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
                 mark = escalate(model, r, s, kind, dissipated, tol);
@@ -271,7 +280,7 @@ fn escalate(model: &Model, r: &Reference, s: &Snapshot, kind: ClaimKind, q: Inte
         let now = measure(kind, &Lifted::new(model, s, &proto), model);
         let then = measure(kind, &Lifted::new(model, &r0, &proto), model);
         let (lo, hi) = deviation(kind, now, then, Mpfi::from_interval(precision, q)).bounds();
-        Mark { step: s.step, lo, hi, precision }
+        Mark { step: s.step, lo, hi, tol, precision }
     };
     let mut mark = at(ESCALATION[0]);
     for &p in &ESCALATION[1..] {
@@ -283,8 +292,23 @@ fn escalate(model: &Model, r: &Reference, s: &Snapshot, kind: ClaimKind, q: Inte
     mark
 }
 
+/// Whether energy is claimed on a model with dissipative terms: then the claim is a balance.
+pub fn is_balance(model: &Model, claims: &[Claim]) -> bool {
+    claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation) && model.terms.iter().any(|t| t.kind.dissipative())
+}
+
+/// The dissipative term kinds of the model, when energy is claimed as a balance.
+pub fn balance_terms(model: &Model, balance: bool) -> Vec<Kind> {
+    let present = |k: &Kind| model.terms.iter().any(|t| t.kind == *k);
+    if balance {
+        Kind::ALL.iter().copied().filter(|k| k.dissipative() && present(k)).collect()
+    } else {
+        vec![]
+    }
+}
+
 /// Every term kind in the model has a homogeneous, energy-valued definition.
-fn dimensions(model: &Model) -> Result<(), String> {
+pub fn dimensions(model: &Model) -> Result<(), String> {
     model.terms.iter().try_for_each(|t| t.kind.check_dimensions())
 }
 
@@ -442,16 +466,16 @@ mod tests {
     #[test]
     fn marks_round_trip_through_json_exactly() {
         let marks = [
-            Mark { step: 3, lo: 1.0000000000000002e-300, hi: f64::INFINITY, precision: 53 },
-            Mark { step: 4, lo: f64::NEG_INFINITY, hi: 4.9e-324, precision: 1024 },
+            Mark { step: 3, lo: 1.0000000000000002e-300, hi: f64::INFINITY, tol: 1e-5, precision: 53 },
+            Mark { step: 4, lo: f64::NEG_INFINITY, hi: 4.9e-324, tol: 0.1, precision: 1024 },
         ];
         let text = serde_json::to_string(&marks).unwrap();
-        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",53],[4,"-inf",5e-324,1024]]"#);
+        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",1e-5,53],[4,"-inf",5e-324,0.1,1024]]"#);
         let back: Vec<Mark> = serde_json::from_str(&text).unwrap();
         assert_eq!(back, marks);
-        let nan: Mark = serde_json::from_str(r#"[1,"nan","nan",53]"#).unwrap();
-        assert!(nan.lo.is_nan());
-        assert!(serde_json::from_str::<Mark>(r#"[1,"zero",0,53]"#).is_err());
+        let nan: Mark = serde_json::from_str(r#"[1,"nan","nan",1,53]"#).unwrap();
+        assert!(nan.lo.is_nan() && nan.same(&nan));
+        assert!(serde_json::from_str::<Mark>(r#"[1,"zero",0,1,53]"#).is_err());
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Verdicts as one line of text each; `lagra run` and a re-check print the same lines.
 
-use crate::claims::ClaimKind;
+use crate::claims::{Claim, ClaimKind};
 use crate::decision::{Precision, Verdict, BINARY64};
+use crate::terms::Kind;
 
 /// `x` in scientific notation with a two-digit exponent (`1e-05`), exactly as given.
 pub fn sci(x: f64) -> String {
@@ -51,9 +52,23 @@ fn measure(kind: ClaimKind, balance: bool) -> &'static str {
     }
 }
 
+/// The verdict line of every claim, in the order of the claims: what `lagra run` prints and
+/// what a re-check must reproduce.
+pub fn lines(verdicts: &[Verdict], claims: &[Claim], dissipators: &[Kind]) -> Vec<String> {
+    let names: Vec<&str> = dissipators.iter().map(|k| k.name()).collect();
+    verdicts
+        .iter()
+        .zip(claims)
+        .map(|(v, c)| {
+            let balance = if c.kind == ClaimKind::EnergyConservation { &names[..] } else { &[] };
+            line(v, balance, c.tol.is_some())
+        })
+        .collect()
+}
+
 /// One verdict line. `balance` names the dissipative terms when energy is a balance;
 /// `has_tol` tells whether the tolerance was declared or is the round-off budget.
-pub fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
+fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
     let name = v.claim().name();
     let q = measure(v.claim(), !balance.is_empty());
     let tol = |t: f64| {

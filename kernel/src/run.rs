@@ -7,6 +7,7 @@ use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
 use crate::solvers::VelocityVerlet;
 use crate::state::State;
+use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
 use serde::Serialize;
 use std::io::Write;
@@ -33,6 +34,8 @@ pub struct Measured {
 }
 
 pub struct Report {
+    /// The run length asked for, and the steps taken (fewer if the run halted).
+    pub planned_steps: u64,
     pub steps: u64,
     pub wall_s: f64,
     pub stop: Option<Stop>,
@@ -46,6 +49,8 @@ pub struct Options<'a> {
     pub steps: Option<u64>,
     /// One JSON line per frame.
     pub trace: Option<&'a mut dyn Write>,
+    /// Called with every state the checker is shown (step 0 included), to keep them.
+    pub record: Option<&'a mut dyn FnMut(&Snapshot) -> std::io::Result<()>>,
 }
 
 #[derive(Serialize)]
@@ -68,7 +73,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         scene.predictions.iter().map(|p| (Meter::new(p, &scene.model), p)).collect();
 
     let start = Instant::now();
-    let mut stop = None;
+    let mut stop: Option<Stop>;
     let mut trace = |s: &State, potential: f64| -> Result<(), String> {
         if let Some(w) = opts.trace.as_mut() {
             let line =
@@ -78,12 +83,22 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         }
         Ok(())
     };
+    // Every state the run produces is recorded and shown to the checker, in order.
+    let mut check = |s: &State| -> Result<Option<Stop>, String> {
+        if let Some(r) = opts.record.as_mut() {
+            r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
+        }
+        Ok(monitor.observe(&s.snapshot()).err().map(Stop::Checker))
+    };
+    let non_finite = |s: &State| {
+        s.non_finite().map(|b| {
+            Stop::Checker(Halt::InvalidState(format!("step {}: body {b} has a non-finite coordinate", s.step)))
+        })
+    };
     match VelocityVerlet::new(&graph, &state) {
         Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
         Ok(mut solver) => {
-            if let Err(h) = monitor.observe(&state.snapshot()) {
-                stop = Some(Stop::Checker(h));
-            }
+            stop = check(&state)?;
             meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
             trace(&state, solver.potential)?;
             while stop.is_none() && state.step < steps {
@@ -91,15 +106,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
                     break;
                 }
-                if !solver.potential.is_finite() {
-                    if let Some(b) = state.non_finite() {
-                        let msg = format!("step {}: body {b} has a non-finite coordinate", state.step);
-                        stop = Some(Stop::Checker(Halt::InvalidState(msg)));
-                        break;
-                    }
-                }
-                if let Err(h) = monitor.observe(&state.snapshot()) {
-                    stop = Some(Stop::Checker(h));
+                stop = check(&state)?;
+                if stop.is_none() && !solver.potential.is_finite() {
+                    stop = non_finite(&state);
                 }
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
                 if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
@@ -107,12 +116,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 }
             }
             if stop.is_none() {
-                if let Some(b) = state.non_finite() {
-                    stop = Some(Stop::Checker(Halt::InvalidState(format!(
-                        "step {}: body {b} has a non-finite coordinate",
-                        state.step
-                    ))));
-                }
+                stop = non_finite(&state);
             }
         }
     }
@@ -126,5 +130,5 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees }
         })
         .collect();
-    Ok(Report { steps: state.step, wall_s, stop, outcome: monitor.finish(), predictions, state })
+    Ok(Report { planned_steps: steps, steps: state.step, wall_s, stop, outcome: monitor.finish(), predictions, state })
 }

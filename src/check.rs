@@ -1,0 +1,56 @@
+//! `lagra check CERTIFICATE [--states FILE] [--scene FILE]`.
+
+use lagra_checker::certificate::Certificate;
+use lagra_kernel::lang::compile;
+use sha2::{Digest, Sha256};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The certificate `lagra run --certificate` wrote.
+    certificate: PathBuf,
+    /// The state file `lagra run --states` wrote: every enclosure is then evaluated again.
+    #[arg(long, value_name = "FILE")]
+    states: Option<PathBuf>,
+    /// The scene source: the certificate must be of this exact source, its model and claims
+    /// those the source compiles to (catches a certificate edited and re-sealed).
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
+}
+
+pub fn main(a: Args) -> ExitCode {
+    let r = lagra_checker::cli::check(&a.certificate, a.states.as_deref());
+    print!("{}", r.stdout);
+    eprint!("{}", r.stderr);
+    let mut code = r.code;
+    if let (Some(scene), 0 | 1) = (&a.scene, code) {
+        match of_scene(&a.certificate, scene) {
+            Ok(()) => println!("scene       {} compiles to the certified model and claims", scene.display()),
+            Err(why) => {
+                println!("scene       DISAGREES: {why}");
+                code = 1;
+            }
+        }
+    }
+    ExitCode::from(code)
+}
+
+/// The certificate's source digest, model and claims are those of `scene`.
+fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
+    let source = std::fs::read_to_string(scene).map_err(|e| format!("cannot read {}: {e}", scene.display()))?;
+    let text = std::fs::read_to_string(cert).map_err(|e| e.to_string())?;
+    let c = Certificate::read(&text)?;
+    let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+    if c.source_digest != format!("sha256:{digest}") {
+        return Err(format!("the certificate is of another source ({})", c.source_digest));
+    }
+    let s = compile(&source).map_err(|d| d.render(&scene.display().to_string(), &source).head)?;
+    if s.model != c.model {
+        return Err("the certified model is not the one the source compiles to".into());
+    }
+    if s.claims != c.claims {
+        return Err("the certified claims are not the ones the source declares".into());
+    }
+    Ok(())
+}
