@@ -49,16 +49,26 @@ fn oscillator_passes_and_reports_its_period() {
     assert!(out.contains("oscillator_period agrees  measured 3.14"), "{out}");
 }
 
-/// Every scene shipped in `scenes/` passes its own claims and predictions.
+/// Every scene shipped in `scenes/` passes its own claims and predictions, and its certificate
+/// re-checks from the states to the same verdicts.
 #[test]
-fn every_scene_passes_its_own_expects() {
+fn every_scene_passes_its_own_expects_and_re_checks_to_the_same_verdicts() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut seen = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
         let p = entry.unwrap().path();
         if p.extension().is_some_and(|e| e == "lagra") {
-            let o = lagra(&["run", p.to_str().unwrap()]);
+            let tmp = tempfile::tempdir().unwrap();
+            let (cert, states) = (tmp.path().join("c.json"), tmp.path().join("s.bin"));
+            let (c, s) = (cert.to_str().unwrap(), states.to_str().unwrap());
+            let o = lagra(&["run", p.to_str().unwrap(), "--certificate", c, "--states", s]);
             assert_eq!(o.status.code(), Some(0), "{}:\n{}{}", p.display(), stdout(&o), stderr(&o));
+            // the re-check, without the kernel, reaches the same verdicts
+            let re = lagra(&["check", c, "--states", s, "--scene", p.to_str().unwrap()]);
+            assert_eq!(re.status.code(), Some(0), "{}", stdout(&re));
+            let verdicts = |t: &str| t.lines().filter(|l| l.contains(" PASS  ")).map(String::from).collect::<Vec<_>>();
+            assert_eq!(verdicts(&stdout(&re)), verdicts(&stdout(&o)));
+            assert!(stdout(&re).contains("AGREES with the certificate"));
             seen += 1;
         }
     }

@@ -81,6 +81,15 @@ impl Certificate {
             if claim.every == 0 || claim.tol.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
                 return Err(format!("{}: every must be ≥ 1 and tol finite and positive", claim.kind.name()));
             }
+            if let Some(m) = trail.marks.iter().find(|m| m.lo > m.hi) {
+                return Err(format!(
+                    "{} at step {}: enclosure [{}, {}] is upside down",
+                    claim.kind.name(),
+                    m.step,
+                    m.lo,
+                    m.hi
+                ));
+            }
         }
         if !(c.run.dt.is_finite() && c.run.dt > 0.0) || c.run.steps > c.run.planned_steps {
             return Err("run: dt must be finite and positive, steps at most planned_steps".into());

@@ -32,6 +32,15 @@ pub enum Halt {
     InvalidState(String),
 }
 
+impl std::fmt::Display for Halt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Halt::Breach(b) => write!(f, "halted at step {}: {} is certainly violated", b.step, b.claim.name()),
+            Halt::InvalidState(m) => write!(f, "halted: {m}"),
+        }
+    }
+}
+
 /// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, the tolerance it was held to
 /// (declared, or the round-off budget at that step) and the precision that produced the
 /// enclosure. Written as `[step, lo, hi, tol, precision]`; the numbers as exact binary64 JSON
@@ -216,6 +225,8 @@ impl Monitor {
             (l.t, l.power) = (s.t, power);
         }
         let dissipated = self.ledger.as_ref().map_or(point(0.0), |l| l.dissipated);
+        // Every claim due here is judged before the run halts on the first breach.
+        let mut first = None;
         for t in self.tracks.iter_mut().filter(|t| due(t)) {
             let kind = t.claim.kind;
             let tol = match kind {
@@ -238,10 +249,10 @@ impl Monitor {
             t.marks.push(mark);
             if let Err(b) = t.judge.admit(s.step, (mark.lo, mark.hi), tol, mark.precision) {
                 t.stopped = Some(Verdict::Fail(b.clone()));
-                return Err(Halt::Breach(b));
+                first.get_or_insert(Halt::Breach(b));
             }
         }
-        Ok(())
+        first.map_or(Ok(()), Err)
     }
 
     pub fn finish(self) -> Outcome {
@@ -470,7 +481,7 @@ mod tests {
             Mark { step: 4, lo: f64::NEG_INFINITY, hi: 4.9e-324, tol: 0.1, precision: 1024 },
         ];
         let text = serde_json::to_string(&marks).unwrap();
-        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",1e-5,53],[4,"-inf",5e-324,0.1,1024]]"#);
+        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",0.00001,53],[4,"-inf",5e-324,0.1,1024]]"#);
         let back: Vec<Mark> = serde_json::from_str(&text).unwrap();
         assert_eq!(back, marks);
         let nan: Mark = serde_json::from_str(r#"[1,"nan","nan",1,53]"#).unwrap();

@@ -70,11 +70,9 @@ fn replay(c: &Certificate, s: &States) -> Result<(Vec<Verdict>, Vec<Trail>), Str
             ));
         }
         if let Some(h) = halted {
-            return Err(format!("the states go on after the run halted at step {h}"));
+            return Err(format!("the states go on after the run must have {h}"));
         }
-        if monitor.observe(&state.snapshot()).is_err() {
-            halted = Some(k);
-        }
+        halted = monitor.observe(&state.snapshot()).err();
     }
     let out = monitor.finish();
     Ok((out.verdicts, out.trails))
