@@ -1,0 +1,167 @@
+//! Soundness of the trusted core, as properties over thousands of random cases:
+//! every enclosure holds the 1024-bit MPFR value, the decision never PASSes a drift that the
+//! 1024-bit value shows to exceed the tolerance, and the certificate reader never panics.
+
+use inari::Interval;
+use lagra_checker::certificate::{Certificate, Run, FORMAT};
+use lagra_checker::claims::{Claim, ClaimKind};
+use lagra_checker::decision::Verdict;
+use lagra_checker::model::{Body, Model, Snapshot, TermInstance, UnitSystem};
+use lagra_checker::monitor::Monitor;
+use lagra_checker::quantities::Lifted;
+use lagra_checker::real::Real;
+use lagra_checker::terms::{Kind, Shape, Site};
+use proptest::prelude::*;
+use rug::Float;
+
+const BITS: u32 = 1024;
+
+fn inside(i: Interval, f: &Float) -> bool {
+    !i.is_empty() && Float::with_val(BITS, i.inf()) <= *f && *f <= Float::with_val(BITS, i.sup())
+}
+
+fn site<R: Real>(proto: &R, x: [f64; 3], v: [f64; 3], m: f64, q: f64) -> Site<R> {
+    Site { x: x.map(|c| proto.lift(c)), v: v.map(|c| proto.lift(c)), m: proto.lift(m), q: proto.lift(q) }
+}
+
+type Body3 = ([f64; 3], [f64; 3], f64, f64);
+
+fn body() -> impl Strategy<Value = Body3> {
+    (prop::array::uniform3(-10.0f64..10.0), prop::array::uniform3(-5.0f64..5.0), 0.01f64..100.0, -3.0f64..3.0)
+}
+
+/// The term evaluated on `bodies` (as many as its shape takes) in `proto`'s arithmetic.
+fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R) -> (R, Option<R>) {
+    let n = kind.spec().shape.arity();
+    let sites: Vec<Site<R>> = bodies[..n].iter().map(|b| site(proto, b.0, b.1, b.2, b.3)).collect();
+    let s: Vec<&Site<R>> = sites.iter().collect();
+    let p: Vec<R> = params.iter().map(|&c| proto.lift(c)).collect();
+    (kind.potential(&p, &s), kind.rayleigh(&p, &s))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+
+    /// Every term's energy (and dissipation function) enclosure holds the 1024-bit value.
+    #[test]
+    fn every_term_enclosure_holds_the_mpfr_value(
+        kind in prop::sample::select(Kind::ALL.to_vec()),
+        params in prop::collection::vec(0.01f64..100.0, 8),
+        signs in prop::collection::vec(any::<bool>(), 8),
+        bodies in prop::collection::vec(body(), 2),
+    ) {
+        let w = kind.spec().width();
+        // vector parameters (fields) may point anywhere; scalar ones are magnitudes
+        let params: Vec<f64> = params[..w].iter().zip(&signs).map(|(&p, &s)| {
+            if kind.spec().params.iter().any(|q| q.len == 3) && s { -p } else { p }
+        }).collect();
+        let (iv, iv_f) = eval(kind, &params, &bodies, &Interval::EMPTY);
+        let (hp, hp_f) = eval(kind, &params, &bodies, &Float::new(BITS));
+        prop_assert!(inside(iv, &hp), "{kind:?}: {iv} does not hold {hp}");
+        if let (Some(a), Some(b)) = (iv_f, hp_f) {
+            prop_assert!(inside(a, &b), "{kind:?} dissipation: {a} does not hold {b}");
+        }
+    }
+}
+
+fn model() -> Model {
+    Model {
+        units: UnitSystem::Reduced,
+        bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 2.0, charge: 0.0 }, Body { mass: 0.5, charge: 0.0 }],
+        terms: vec![
+            TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![3.0, 1.0, 0.0] },
+            TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.5] },
+            TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -1.0, 0.0] },
+        ],
+    }
+}
+
+fn drift(model: &Model, a: &Snapshot, b: &Snapshot) -> Float {
+    let h = |s: &Snapshot| Lifted::new(model, s, &Float::new(BITS)).energy(model);
+    let (h0, h1) = (h(a), h(b));
+    Float::with_val(BITS, &h1 - &h0).abs() / h0.abs()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+
+    /// Whatever the states and the tolerance, a PASS means the 1024-bit drift is within it.
+    #[test]
+    fn the_decision_never_passes_a_drift_beyond_the_tolerance(
+        x0 in prop::array::uniform3(prop::array::uniform3(-3.0f64..3.0)),
+        v0 in prop::array::uniform3(prop::array::uniform3(-2.0f64..2.0)),
+        nudge in prop::array::uniform3(prop::array::uniform3(-1e-9f64..1e-9)),
+        scale in 0.0f64..2.0,
+    ) {
+        let m = model();
+        let x1: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|c| x0[i][c] + nudge[i][c]));
+        let (a, b) = (Snapshot { step: 0, t: 0.0, x: &x0, v: &v0 }, Snapshot { step: 1, t: 1.0, x: &x1, v: &v0 });
+        let exact = drift(&m, &a, &b);
+        // a tolerance around the true drift, where the decision is hardest
+        let tol = exact.to_f64() * scale;
+        prop_assume!(tol > 0.0 && tol.is_finite());
+        let claims = vec![Claim { kind: ClaimKind::EnergyConservation, tol: Some(tol), every: 1 }];
+        let mut mon = Monitor::new(m, claims, 1).unwrap();
+        mon.observe(&a).unwrap();
+        let _ = mon.observe(&b);
+        let v = &mon.finish().verdicts[0];
+        if let Verdict::Pass(_) = v {
+            prop_assert!(exact <= tol, "PASS with drift {exact} > tol {tol}");
+        }
+        if let Verdict::Fail(_) = v {
+            prop_assert!(exact > tol, "FAIL with drift {exact} ≤ tol {tol}");
+        }
+    }
+}
+
+/// A small, valid, sealed certificate.
+fn certificate() -> String {
+    let m = model();
+    let claims = vec![Claim { kind: ClaimKind::MomentumConservation, tol: None, every: 1 }];
+    let mut mon = Monitor::new(m.clone(), claims.clone(), 1).unwrap();
+    let x = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.0, 0.0]];
+    let v = [[0.0; 3]; 3];
+    for step in 0..=1 {
+        mon.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+    }
+    let out = mon.finish();
+    Certificate {
+        format: FORMAT.into(),
+        scene: "s".into(),
+        source_digest: "sha256:0".into(),
+        model: m,
+        claims,
+        run: Run { integrator: "velocity_verlet".into(), dt: 1.0, planned_steps: 1, steps: 1 },
+        trails: out.trails,
+        verdicts: vec!["x".into()],
+        states_checksum: None,
+        checksum: String::new(),
+    }
+    .seal()
+    .to_json()
+}
+
+#[test]
+fn the_sample_certificate_reads() {
+    Certificate::read(&certificate()).unwrap();
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+
+    /// The reader returns an error or a certificate for any input: it never panics.
+    #[test]
+    fn the_certificate_reader_never_panics_on_noise(text in ".{0,300}") {
+        let _ = Certificate::read(&text);
+    }
+
+    /// Nor on a real certificate cut short or with one byte changed.
+    #[test]
+    fn the_certificate_reader_never_panics_on_damage(cut in 0usize..2000, at in 0usize..2000, byte in any::<u8>()) {
+        let mut b = certificate().into_bytes();
+        let n = b.len();
+        b[at % n] = byte;
+        b.truncate(n - cut % n);
+        let _ = Certificate::read(&String::from_utf8_lossy(&b));
+    }
+}
