@@ -1,12 +1,19 @@
 #!/usr/bin/env bash
-# Installs what building Lagra needs beyond Rust itself: m4, which rug's bundled GMP build
-# requires and a fresh Debian machine lacks. Safe to run again; does nothing when m4 is there.
+# Installs what building and testing Lagra needs beyond Rust itself: m4, which rug's bundled
+# GMP build requires and a fresh Debian machine lacks, and z3 for the SMT proofs. Safe to run
+# again; does nothing when both are there.
 set -eu
 if ! command -v m4 >/dev/null 2>&1; then
   echo "setup: installing m4 (needed to build GMP for rug)" >&2
   sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
   $sudo apt-get update -qq
   $sudo apt-get install -y -qq m4 >/dev/null
+fi
+# z3 proves the SMT models in checker/proofs (PyPI's z3-solver ships the z3 binary).
+if ! command -v z3 >/dev/null 2>&1; then
+  echo "setup: installing z3 (PyPI z3-solver) for the SMT proofs" >&2
+  python3 -m pip install --quiet --disable-pip-version-check z3-solver >&2
+  hash -r
 fi
 # A RUSTFLAGS variable would replace .cargo/config.toml's `+fma`, which inari needs.
 if [ -n "${RUSTFLAGS:-}" ]; then

@@ -33,6 +33,40 @@ pub fn classify(lo: f64, hi: f64, tol: f64) -> Class {
     }
 }
 
+/// The soundness of [`classify`], one property body run four ways: by proptest and by
+/// exhaustive enumeration (the tests below), by Kani (`proofs`, where Kani is installed), and as
+/// an SMT-LIB model by z3 (`checker/proofs/classify.smt2`). For any enclosure `[lo, hi]`, any
+/// tolerance and any value `x` in the enclosure: `Within` ⇒ x ≤ tol, `Beyond` ⇒ x > tol, and a
+/// NaN anywhere ⇒ `Straddles`. (Comparisons of binary64 values are exact, so what holds for
+/// every binary64 x in the enclosure holds for every real x in it.)
+#[cfg(any(test, kani, kani_typecheck))]
+pub fn classify_is_sound(lo: f64, hi: f64, tol: f64, x: f64) -> bool {
+    let c = classify(lo, hi, tol);
+    let inside = lo <= x && x <= hi;
+    let sound = match c {
+        Class::Within => !inside || x <= tol,
+        Class::Beyond => !inside || x > tol,
+        Class::Straddles => true,
+    };
+    sound && (!(lo.is_nan() || hi.is_nan() || tol.is_nan()) || c == Class::Straddles)
+}
+
+#[cfg(any(kani, kani_typecheck))]
+mod proofs {
+    // Under kani_typecheck nothing calls the harnesses; under kani, Kani does.
+    #![cfg_attr(kani_typecheck, allow(dead_code))]
+    #[cfg(kani_typecheck)]
+    use crate::kani_typecheck::any;
+    #[cfg(kani)]
+    use kani::any;
+
+    /// For every binary64 lo, hi, tol and x.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn classify_is_sound_for_every_binary64() {
+        assert!(super::classify_is_sound(any(), any(), any(), any()));
+    }
+}
+
 /// The binary precision of the arithmetic that decided a checkpoint: 53 for binary64
 /// intervals, more for MPFR intervals.
 pub type Precision = u32;
@@ -216,6 +250,54 @@ mod tests {
         j.admit(2, iv(0.0, 1e-7), 1e-5, 256).unwrap();
         let Verdict::Pass(p) = j.finish() else { panic!("expected PASS") };
         assert_eq!(p.precision(), 256);
+    }
+
+    /// Values where a comparison can go wrong: zeros, subnormals, neighbours of 1, the extremes.
+    fn special() -> Vec<f64> {
+        let one = [1.0f64.next_down(), 1.0, 1.0f64.next_up(), 2.0];
+        let small = [0.0, 5e-324, 1e-310, f64::MIN_POSITIVE, 1e-300];
+        let big = [1e300, f64::MAX, f64::INFINITY];
+        let pos: Vec<f64> = one.iter().chain(&small).chain(&big).copied().collect();
+        pos.iter().flat_map(|&x| [x, -x]).chain([f64::NAN]).collect()
+    }
+
+    #[test]
+    fn classify_is_sound_on_every_quadruple_of_special_values() {
+        let s = special();
+        let mut n = 0u64;
+        for &lo in &s {
+            for &hi in &s {
+                for &tol in &s {
+                    for &x in &s {
+                        assert!(classify_is_sound(lo, hi, tol, x), "{lo} {hi} {tol} {x}");
+                        n += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(n, (s.len() as u64).pow(4));
+    }
+
+    /// Every binary32 value, widened, as the enclosure's upper end and as the value in it.
+    #[test]
+    fn classify_is_sound_for_every_binary32() {
+        for bits in 0..=u32::MAX {
+            // black_box: without it the optimiser folds the whole loop away
+            let x = std::hint::black_box(f64::from(f32::from_bits(bits)));
+            assert!(
+                classify_is_sound(0.0, x, 1.0, x)
+                    && classify_is_sound(x, x, x, x)
+                    && classify_is_sound(-1.0, 1.0, x, x)
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(100_000))]
+        #[test]
+        fn classify_is_sound_for_random_binary64(lo: f64, hi: f64, tol: f64, x: f64) {
+            proptest::prop_assert!(classify_is_sound(lo, hi, tol, x));
+        }
     }
 
     #[test]

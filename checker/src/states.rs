@@ -31,6 +31,42 @@ pub fn count_for(bodies: u64, len: u64) -> Option<u64> {
     (body % record == 0).then_some(body / record)
 }
 
+/// `file_len` and `count_for` agree with exact (128-bit) arithmetic, for every u64 input: a
+/// length is given exactly when it fits, and it gives the count back. One property body, run by
+/// proptest and exhaustively here and by Kani where Kani is installed (`proofs`).
+#[cfg(any(test, kani, kani_typecheck))]
+pub fn lengths_are_exact(bodies: u64, count: u64) -> bool {
+    let exact = (u128::from(bodies) * 48 + 16) * u128::from(count) + u128::from(HEADER + TRAILER);
+    match file_len(bodies, count) {
+        Some(len) => u128::from(len) == exact && count_for(bodies, len) == Some(count),
+        None => exact > u128::from(u64::MAX) || u128::from(bodies) * 48 + 16 > u128::from(u64::MAX),
+    }
+}
+
+#[cfg(any(kani, kani_typecheck))]
+mod proofs {
+    // Under kani_typecheck nothing calls the harnesses; under kani, Kani does.
+    #![cfg_attr(kani_typecheck, allow(dead_code))]
+    #[cfg(kani_typecheck)]
+    use crate::kani_typecheck::any;
+    #[cfg(kani)]
+    use kani::any;
+
+    #[cfg_attr(kani, kani::proof)]
+    pub fn lengths_are_exact_for_every_u64() {
+        assert!(super::lengths_are_exact(any(), any()));
+    }
+
+    /// Any length the reader accepts for any body count holds whole states.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn an_accepted_length_holds_whole_states() {
+        let (bodies, len): (u64, u64) = (any(), any());
+        if let Some(count) = super::count_for(bodies, len) {
+            assert_eq!(super::file_len(bodies, count), Some(len));
+        }
+    }
+}
+
 pub struct StateWriter<W: Write> {
     w: W,
     hash: Fnv,
@@ -154,6 +190,23 @@ mod tests {
     }
 
     #[test]
+    fn lengths_are_exact_on_small_and_boundary_values() {
+        for bodies in 0..2048 {
+            for count in 0..2048 {
+                assert!(lengths_are_exact(bodies, count));
+            }
+        }
+        // around where record·count + 40 stops fitting in a u64
+        let edges = |m: u64| [0, 1, 2, m.saturating_sub(1), m, m.saturating_add(1), u64::MAX - 1, u64::MAX];
+        for bodies in edges((u64::MAX - 16) / 48) {
+            let record = bodies.saturating_mul(48).saturating_add(16);
+            for count in edges((u64::MAX - 40) / record.max(1)) {
+                assert!(lengths_are_exact(bodies, count), "{bodies} {count}");
+            }
+        }
+    }
+
+    #[test]
     fn states_round_trip_bit_for_bit() {
         let s = [(0, 0.0, [1.0, -0.0, 5e-324], [f64::MAX, 1e-310, -2.5]), (1, 0.1, [0.1, 0.2, 0.3], [0.0; 3])];
         let read = States::read(file(&s)).unwrap();
@@ -207,11 +260,9 @@ mod tests {
         }
 
         #[test]
-        fn length_arithmetic_agrees_with_its_inverse(bodies in 0u64..1 << 40, count in 0u64..1 << 20) {
-            match file_len(bodies, count) {
-                Some(len) => prop_assert_eq!(count_for(bodies, len), Some(count)),
-                None => prop_assert!((bodies as u128 * 48 + 16) * count as u128 + 40 > u64::MAX as u128),
-            }
+        fn lengths_are_exact_for_random_u64(bodies: u64, count: u64) {
+            prop_assert!(lengths_are_exact(bodies, count));
+            prop_assert!(lengths_are_exact(bodies >> 20, count >> 40));
         }
     }
 }

@@ -10,7 +10,7 @@ use lagra_checker::model::{Body, Model, Snapshot, TermInstance, UnitSystem};
 use lagra_checker::monitor::Monitor;
 use lagra_checker::quantities::Lifted;
 use lagra_checker::real::Real;
-use lagra_checker::terms::{Kind, Shape, Site};
+use lagra_checker::terms::{Kind, Site};
 use proptest::prelude::*;
 use rug::Float;
 

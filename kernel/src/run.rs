@@ -44,13 +44,16 @@ pub struct Report {
     pub state: State,
 }
 
+/// Keeps the states a run produces (the state file's writer).
+pub type Recorder<'a> = &'a mut dyn FnMut(&Snapshot) -> std::io::Result<()>;
+
 pub struct Options<'a> {
     /// Overrides the scene's run length.
     pub steps: Option<u64>,
     /// One JSON line per frame.
     pub trace: Option<&'a mut dyn Write>,
     /// Called with every state the checker is shown (step 0 included), to keep them.
-    pub record: Option<&'a mut dyn FnMut(&Snapshot) -> std::io::Result<()>>,
+    pub record: Option<Recorder<'a>>,
 }
 
 #[derive(Serialize)]

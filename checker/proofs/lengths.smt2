@@ -1,0 +1,12 @@
+; The state file's length arithmetic, `file_len` and `count_for` in checker/src/states.rs, over
+; unbounded integers: a length that fits in 64 bits gives back exactly the count it was made
+; from. Run: z3 checker/proofs/lengths.smt2 (expect one `unsat`).
+(set-logic QF_NIA)
+(declare-const bodies Int)
+(declare-const count Int)
+(define-fun u64 ((v Int)) Bool (and (<= 0 v) (< v 18446744073709551616)))
+(define-fun record () Int (+ 16 (* 48 bodies)))
+(define-fun len () Int (+ 40 (* count record)))
+(assert (and (u64 bodies) (u64 count) (u64 record) (u64 len)))
+(assert (not (and (= (mod (- len 40) record) 0) (= (div (- len 40) record) count))))
+(check-sat)

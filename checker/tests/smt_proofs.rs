@@ -1,0 +1,25 @@
+//! The SMT-LIB models in `checker/proofs/` are proved by z3: every query must be `unsat`.
+//! z3 comes from PyPI (`z3-solver`); `setup.sh` installs it.
+
+use std::path::Path;
+use std::process::Command;
+
+fn prove(file: &str, queries: usize) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("proofs").join(file);
+    let out = Command::new("z3").arg("-T:300").arg(&path).output().unwrap_or_else(|e| {
+        panic!("z3 is needed to prove {file} ({e}); `bash setup.sh` installs it from PyPI (z3-solver)")
+    });
+    let text = String::from_utf8_lossy(&out.stdout);
+    let answers: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+    assert_eq!(answers, vec!["unsat"; queries], "{file}: {text}{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn classify_is_sound_for_every_binary64() {
+    prove("classify.smt2", 4);
+}
+
+#[test]
+fn state_file_lengths_give_back_their_count() {
+    prove("lengths.smt2", 1);
+}
