@@ -51,8 +51,11 @@ impl Summary {
         let mut terms: Vec<TermCount> = vec![];
         for t in &scene.model.terms {
             match terms.iter_mut().find(|c| c.kind == t.kind.name()) {
-                Some(c) => c.count += 1,
-                None => terms.push(TermCount { kind: t.kind.name(), count: 1, dissipative: t.kind.dissipative() }),
+                Some(c) => {
+                    c.count += 1;
+                    c.dissipative |= t.dissipates();
+                }
+                None => terms.push(TermCount { kind: t.kind.name(), count: 1, dissipative: t.dissipates() }),
             }
         }
         let lines = lines(&r.outcome.verdicts, &scene.claims, &r.outcome.dissipators);

@@ -78,9 +78,7 @@ impl Certificate {
             if claim.kind != trail.claim {
                 return Err(format!("trail for {} stands where {} is claimed", trail.claim.name(), claim.kind.name()));
             }
-            if claim.every == 0 || claim.tol.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
-                return Err(format!("{}: every must be ≥ 1 and tol finite and positive", claim.kind.name()));
-            }
+            claim.validate(c.model.bodies.len())?;
             if let Some(m) = trail.marks.iter().find(|m| m.lo > m.hi) {
                 return Err(format!(
                     "{} at step {}: enclosure [{}, {}] is upside down",

@@ -8,21 +8,25 @@ use serde::{Deserialize, Serialize};
 pub enum ClaimKind {
     /// |H − H₀| ≤ tol·|H₀| (relative); with dissipative terms, |H + Q − H₀| ≤ tol·|H₀|.
     EnergyConservation,
-    /// Every component of Σmv stays at its initial value within tol, or within a round-off
-    /// budget when no tol is given.
+    /// Each claimed component of Σmv stays at its initial value within tol, or within a
+    /// round-off budget when no tol is given.
     MomentumConservation,
-    /// Every component of Σm x×v, likewise.
+    /// Each claimed component of Σm x×v, likewise.
     AngularMomentumConservation,
     /// Every term definition in the model is homogeneous and energy-valued.
     DimensionalConsistency,
+    /// The distance between two bodies stays within [min, max] (at every checkpoint, step 0
+    /// included).
+    Distance,
 }
 
 impl ClaimKind {
-    pub const ALL: [ClaimKind; 4] = [
+    pub const ALL: [ClaimKind; 5] = [
         ClaimKind::EnergyConservation,
         ClaimKind::MomentumConservation,
         ClaimKind::AngularMomentumConservation,
         ClaimKind::DimensionalConsistency,
+        ClaimKind::Distance,
     ];
 
     pub fn name(self) -> &'static str {
@@ -31,6 +35,7 @@ impl ClaimKind {
             ClaimKind::MomentumConservation => "momentum_conservation",
             ClaimKind::AngularMomentumConservation => "angular_momentum_conservation",
             ClaimKind::DimensionalConsistency => "dimensional_consistency",
+            ClaimKind::Distance => "distance",
         }
     }
 
@@ -43,13 +48,23 @@ impl ClaimKind {
         self != ClaimKind::DimensionalConsistency
     }
 
-    /// The dimension of `tol`: energy's is relative, momentum's absolute.
+    /// Whether the claim compares each state with the first (a conservation law), rather than
+    /// each state on its own.
+    pub fn is_conservation(self) -> bool {
+        matches!(
+            self,
+            ClaimKind::EnergyConservation | ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation
+        )
+    }
+
+    /// The dimension of `tol`, for claims that take one: energy's is relative, the momenta's
+    /// absolute.
     pub fn tol_dim(self) -> Option<Dim> {
         match self {
             ClaimKind::EnergyConservation => Some(Dim::NONE),
             ClaimKind::MomentumConservation => Some(Dim([1, 1, -1, 0])),
             ClaimKind::AngularMomentumConservation => Some(Dim([1, 2, -1, 0])),
-            ClaimKind::DimensionalConsistency => None,
+            ClaimKind::DimensionalConsistency | ClaimKind::Distance => None,
         }
     }
 
@@ -57,6 +72,20 @@ impl ClaimKind {
     pub fn needs_tol(self) -> bool {
         self == ClaimKind::EnergyConservation
     }
+
+    /// Whether the claim may be declared more than once (for different bodies).
+    pub fn repeatable(self) -> bool {
+        self == ClaimKind::Distance
+    }
+}
+
+/// The two bodies of a distance claim and the interval their distance must stay in.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Between {
+    pub bodies: [usize; 2],
+    pub min: f64,
+    pub max: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -66,4 +95,76 @@ pub struct Claim {
     pub tol: Option<f64>,
     /// Check every `every`-th step (and always the first and the last).
     pub every: u64,
+    /// For the momenta: which of the x, y, z components are claimed (all when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<[bool; 3]>,
+    /// For a distance claim: its bodies and bounds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub between: Option<Between>,
+}
+
+impl Claim {
+    pub fn new(kind: ClaimKind, tol: Option<f64>, every: u64) -> Claim {
+        Claim { kind, tol, every, axes: None, between: None }
+    }
+
+    /// The claim as printed: `momentum_conservation`, `momentum_conservation(x, z)`,
+    /// `distance(0, 1)`.
+    pub fn label(&self) -> String {
+        match (&self.axes, &self.between) {
+            (_, Some(b)) => format!("{}({}, {})", self.kind.name(), b.bodies[0], b.bodies[1]),
+            (Some(a), None) if a != &[true; 3] => {
+                let names: Vec<&str> = ["x", "y", "z"].iter().zip(a).filter(|p| *p.1).map(|p| *p.0).collect();
+                format!("{}({})", self.kind.name(), names.join(", "))
+            }
+            _ => self.kind.name().to_string(),
+        }
+    }
+
+    /// The tolerance every checkpoint is held to when it does not depend on the states: the
+    /// declared one, or 0 for a distance (whose deviation is how far it is outside its bounds).
+    /// `None` means the round-off budget.
+    pub fn fixed_tol(&self) -> Option<f64> {
+        if self.kind == ClaimKind::Distance {
+            Some(0.0)
+        } else {
+            self.tol
+        }
+    }
+
+    /// Rejects a claim that does not fit its kind or a model of `bodies` bodies.
+    pub fn validate(&self, bodies: usize) -> Result<(), String> {
+        let name = self.label();
+        if self.kind.needs_tol() && self.tol.is_none() {
+            return Err(format!("{name} needs a tolerance"));
+        }
+        if self.every == 0 {
+            return Err(format!("{name}: every must be at least 1"));
+        }
+        if self.tol.is_some_and(|t| !(t.is_finite() && t > 0.0))
+            || (self.tol.is_some() && self.kind.tol_dim().is_none())
+        {
+            return Err(format!("{name}: a tolerance must be finite and positive, and only where the claim takes one"));
+        }
+        let momentum = matches!(self.kind, ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation);
+        match &self.axes {
+            Some(a) if !momentum || a == &[false; 3] => {
+                return Err(format!("{name}: axes must name a component of a momentum"))
+            }
+            _ => {}
+        }
+        match (&self.between, self.kind == ClaimKind::Distance) {
+            (Some(b), true) => {
+                if b.bodies.iter().any(|&i| i >= bodies) || b.bodies[0] == b.bodies[1] {
+                    return Err(format!("{name}: needs two different bodies of the {bodies}"));
+                }
+                if !(b.min.is_finite() && b.max.is_finite() && 0.0 <= b.min && b.min <= b.max) {
+                    return Err(format!("{name}: needs 0 ≤ min ≤ max, finite"));
+                }
+            }
+            (None, false) => {}
+            _ => return Err(format!("{name}: `between` belongs to a distance claim, and a distance claim needs it")),
+        }
+        Ok(())
+    }
 }

@@ -151,7 +151,8 @@ pub struct Judge {
 
 impl Judge {
     pub fn new(claim: ClaimKind) -> Self {
-        Judge { claim, checkpoints: 0, bound: 0.0, tol: 0.0, precision: BINARY64, undecided: None }
+        // A deviation may be negative (a distance inside its bounds): the bound starts at −∞.
+        Judge { claim, checkpoints: 0, bound: f64::NEG_INFINITY, tol: 0.0, precision: BINARY64, undecided: None }
     }
 
     /// Admits one checkpoint: `[lo, hi]` encloses the deviation, which must be ≤ `tol`;

@@ -123,13 +123,13 @@ struct Track {
     stopped: Option<Verdict>,
 }
 
-/// The state at step 0, kept whole so that it can be re-evaluated at any precision, and the
-/// claimed quantities on it in binary64 intervals.
+/// The state at step 0, kept whole so that it can be re-evaluated at any precision, and each
+/// claim's quantity on it in binary64 intervals (in the order of the claims).
 struct Reference {
     t: f64,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
-    measures: Vec<(ClaimKind, Vec<Interval>)>,
+    measures: Vec<Vec<Interval>>,
 }
 
 pub struct Monitor {
@@ -151,38 +151,43 @@ pub struct Outcome {
 }
 
 /// The quantity a dynamic claim is about.
-fn measure<E: Enclosure>(kind: ClaimKind, q: &Lifted<E>, model: &Model) -> Vec<E> {
-    match kind {
+fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model) -> Vec<E> {
+    let axes = |v: [E; 3]| -> Vec<E> {
+        let keep = c.axes.unwrap_or([true; 3]);
+        v.into_iter().zip(keep).filter(|p| p.1).map(|p| p.0).collect()
+    };
+    match c.kind {
         ClaimKind::EnergyConservation => vec![q.energy(model)],
-        ClaimKind::MomentumConservation => q.momentum().to_vec(),
-        ClaimKind::AngularMomentumConservation => q.angular_momentum().to_vec(),
+        ClaimKind::MomentumConservation => axes(q.momentum()),
+        ClaimKind::AngularMomentumConservation => axes(q.angular_momentum()),
+        ClaimKind::Distance => {
+            c.between.as_ref().map(|b| vec![q.distance(b.bodies[0], b.bodies[1])]).unwrap_or_default()
+        }
         ClaimKind::DimensionalConsistency => vec![],
     }
 }
 
-/// How far it has moved from its reference value: |H + Q − H₀|/|H₀| for energy, the largest
-/// component of |X − X₀| for the momenta.
-fn deviation<E: Enclosure>(kind: ClaimKind, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
-    match kind {
-        ClaimKind::EnergyConservation => {
+/// How far the claimed quantity is from where it must be: |H + Q − H₀|/|H₀| for energy, the
+/// largest claimed component of |X − X₀| for the momenta, max(min − d, d − max) for a distance
+/// (at most 0 inside its bounds).
+fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
+    match (c.kind, &c.between) {
+        (ClaimKind::EnergyConservation, _) => {
             let h0 = reference[0].clone();
             (now[0].clone() + dissipated - h0.clone()).abs() / h0.abs()
         }
-        _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("3 components"),
+        (ClaimKind::Distance, Some(b)) => {
+            let d = now[0].clone();
+            (d.lift(b.min) - d.clone()).max(d.clone() - d.lift(b.max))
+        }
+        _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("a component"),
     }
 }
 
 impl Monitor {
     pub fn new(model: Model, claims: Vec<Claim>, last_step: u64) -> Result<Self, String> {
         model.validate()?;
-        for c in &claims {
-            if c.kind.needs_tol() && c.tol.is_none() {
-                return Err(format!("{} needs a tolerance", c.kind.name()));
-            }
-            if c.every == 0 {
-                return Err(format!("{}: every must be at least 1", c.kind.name()));
-            }
-        }
+        claims.iter().try_for_each(|c| c.validate(model.bodies.len()))?;
         let balance = is_balance(&model, &claims);
         let tracks = claims
             .into_iter()
@@ -210,41 +215,43 @@ impl Monitor {
         }
         let q = Lifted::new(&self.model, s, &Interval::EMPTY);
         let model = &self.model;
-        let Some(r) = &self.reference else {
+        let first_state = self.reference.is_none();
+        if first_state {
             if self.balance {
                 self.ledger = Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: point(0.0) });
             }
-            let kinds = self.tracks.iter().map(|t| t.claim.kind).filter(|k| k.is_dynamic());
-            let measures = kinds.map(|k| (k, measure(k, &q, model))).collect();
+            let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model)).collect();
             self.reference = Some(Reference { t: s.t, x: s.x.to_vec(), v: s.v.to_vec(), measures });
-            return Ok(());
-        };
-        if let Some(l) = &mut self.ledger {
+        } else if let Some(l) = &mut self.ledger {
             let power = q.dissipated_power(model);
             l.dissipated += (point(s.t) - point(l.t)) * (l.power + power) * point(0.5);
             (l.t, l.power) = (s.t, power);
         }
+        let r = self.reference.as_ref().expect("set above");
         let dissipated = self.ledger.as_ref().map_or(point(0.0), |l| l.dissipated);
-        // Every claim due here is judged before the run halts on the first breach.
+        // Every claim due here is judged before the run halts on the first breach; a
+        // conservation law has nothing to compare at its own reference state.
         let mut first = None;
-        for t in self.tracks.iter_mut().filter(|t| due(t)) {
-            let kind = t.claim.kind;
-            let tol = match kind {
-                ClaimKind::EnergyConservation => t.claim.tol.unwrap_or(f64::NAN),
-                ClaimKind::MomentumConservation => {
+        for (n, t) in self.tracks.iter_mut().enumerate() {
+            if !due(t) || (first_state && t.claim.kind.is_conservation()) {
+                continue;
+            }
+            let tol = match (t.claim.fixed_tol(), t.claim.kind) {
+                (Some(tol), _) => tol,
+                (None, ClaimKind::MomentumConservation) => {
                     t.scale = t.scale.max(weighted_speed(model, s, |_| point(1.0)));
                     budget(t, s.step)
                 }
-                _ => {
+                (None, _) => {
                     t.scale = t.scale.max(weighted_speed(model, s, norm1));
                     budget(t, s.step)
                 }
             };
-            let reference = r.measures.iter().find(|m| m.0 == kind).map(|m| m.1.clone()).unwrap_or_default();
             let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision: BINARY64 };
-            (mark.lo, mark.hi) = deviation(kind, measure(kind, &q, model), reference, dissipated).bounds();
+            (mark.lo, mark.hi) =
+                deviation(&t.claim, measure(&t.claim, &q, model), r.measures[n].clone(), dissipated).bounds();
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
-                mark = escalate(model, r, s, kind, dissipated, tol);
+                mark = escalate(model, r, s, &t.claim, dissipated, tol);
             }
             t.marks.push(mark);
             if let Err(b) = t.judge.admit(s.step, (mark.lo, mark.hi), tol, mark.precision) {
@@ -257,14 +264,7 @@ impl Monitor {
 
     pub fn finish(self) -> Outcome {
         let model = self.model;
-        let dissipators = match self.ledger {
-            Some(l) if l.dissipated.sup() > 0.0 => Kind::ALL
-                .iter()
-                .copied()
-                .filter(|k| k.dissipative() && model.terms.iter().any(|t| t.kind == *k))
-                .collect(),
-            _ => vec![],
-        };
+        let dissipators = balance_terms(&model, self.balance);
         let mut verdicts = vec![];
         let mut trails = vec![];
         for t in self.tracks {
@@ -284,13 +284,13 @@ impl Monitor {
 /// Re-evaluates one checkpoint with MPFR intervals at rising precision: the first enclosure
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
-fn escalate(model: &Model, r: &Reference, s: &Snapshot, kind: ClaimKind, q: Interval, tol: f64) -> Mark {
+fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, q: Interval, tol: f64) -> Mark {
     let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
-        let now = measure(kind, &Lifted::new(model, s, &proto), model);
-        let then = measure(kind, &Lifted::new(model, &r0, &proto), model);
-        let (lo, hi) = deviation(kind, now, then, Mpfi::from_interval(precision, q)).bounds();
+        let now = measure(claim, &Lifted::new(model, s, &proto), model);
+        let then = measure(claim, &Lifted::new(model, &r0, &proto), model);
+        let (lo, hi) = deviation(claim, now, then, Mpfi::from_interval(precision, q)).bounds();
         Mark { step: s.step, lo, hi, tol, precision }
     };
     let mut mark = at(ESCALATION[0]);
@@ -303,16 +303,16 @@ fn escalate(model: &Model, r: &Reference, s: &Snapshot, kind: ClaimKind, q: Inte
     mark
 }
 
-/// Whether energy is claimed on a model with dissipative terms: then the claim is a balance.
+/// Whether energy is claimed on a model with a dissipating term: then the claim is a balance.
 pub fn is_balance(model: &Model, claims: &[Claim]) -> bool {
-    claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation) && model.terms.iter().any(|t| t.kind.dissipative())
+    claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation) && model.terms.iter().any(|t| t.dissipates())
 }
 
-/// The dissipative term kinds of the model, when energy is claimed as a balance.
+/// The kinds of the dissipating terms, when energy is claimed as a balance.
 pub fn balance_terms(model: &Model, balance: bool) -> Vec<Kind> {
-    let present = |k: &Kind| model.terms.iter().any(|t| t.kind == *k);
+    let dissipating = |k: &Kind| model.terms.iter().any(|t| t.kind == *k && t.dissipates());
     if balance {
-        Kind::ALL.iter().copied().filter(|k| k.dissipative() && present(k)).collect()
+        Kind::ALL.iter().copied().filter(dissipating).collect()
     } else {
         vec![]
     }
@@ -358,7 +358,7 @@ mod tests {
     }
 
     fn claim(kind: ClaimKind, tol: Option<f64>, every: u64) -> Claim {
-        Claim { kind, tol, every }
+        Claim::new(kind, tol, every)
     }
 
     fn observe(m: &mut Monitor, step: u64, x1: f64, v0: f64) -> Result<(), Halt> {
@@ -456,7 +456,8 @@ mod tests {
         // and binary64 intervals alone really could not: their enclosure straddles 1e-12
         let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Interval::EMPTY);
         let h = q.energy(&cancelling().0);
-        let (lo, hi) = deviation(ClaimKind::EnergyConservation, vec![h], vec![h], point(0.0)).bounds();
+        let energy = claim(ClaimKind::EnergyConservation, Some(1e-12), 1);
+        let (lo, hi) = deviation(&energy, vec![h], vec![h], point(0.0)).bounds();
         assert_eq!(classify(lo, hi, 1e-12), Class::Straddles, "[{lo}, {hi}]");
     }
 

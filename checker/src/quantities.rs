@@ -2,7 +2,7 @@
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
 use crate::model::{Model, Snapshot};
-use crate::real::{norm2, Real, Vec3};
+use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Shape, Site};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
@@ -68,6 +68,11 @@ impl<R: Real> Lifted<R> {
             }
         });
         p
+    }
+
+    /// |x_j − x_i|.
+    pub fn distance(&self, i: usize, j: usize) -> R {
+        norm2(&sub3(&self.sites[j].x, &self.sites[i].x)).sqrt()
     }
 
     pub fn momentum(&self) -> Vec3<R> {

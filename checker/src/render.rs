@@ -48,55 +48,59 @@ fn measure(kind: ClaimKind, balance: bool) -> &'static str {
         ClaimKind::EnergyConservation => "|ΔH|/|H₀|",
         ClaimKind::MomentumConservation => "|ΔP|",
         ClaimKind::AngularMomentumConservation => "|ΔL|",
+        ClaimKind::Distance => "max(min−d, d−max)",
         ClaimKind::DimensionalConsistency => "",
     }
 }
 
 /// The verdict line of every claim, in the order of the claims: what `lagra run` prints and
-/// what a re-check must reproduce.
+/// what a re-check must reproduce. `dissipators` name the terms an energy balance accounts for.
 pub fn lines(verdicts: &[Verdict], claims: &[Claim], dissipators: &[Kind]) -> Vec<String> {
     let names: Vec<&str> = dissipators.iter().map(|k| k.name()).collect();
     verdicts
         .iter()
         .zip(claims)
-        .map(|(v, c)| {
-            let balance = if c.kind == ClaimKind::EnergyConservation { &names[..] } else { &[] };
-            line(v, balance, c.tol.is_some())
-        })
+        .map(|(v, c)| line(v, c, if c.kind == ClaimKind::EnergyConservation { &names } else { &[] }))
         .collect()
 }
 
-/// One verdict line. `balance` names the dissipative terms when energy is a balance;
-/// `has_tol` tells whether the tolerance was declared or is the round-off budget.
-fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
-    let name = v.claim().name();
-    let q = measure(v.claim(), !balance.is_empty());
-    let tol = |t: f64| {
-        if has_tol {
-            format!("tol {}", sci(t))
-        } else {
-            format!("round-off budget {}", up(t))
-        }
+/// One verdict line.
+fn line(v: &Verdict, c: &Claim, balance: &[&str]) -> String {
+    let name = c.label();
+    let q = measure(c.kind, !balance.is_empty());
+    let tol = |t: f64| match (c.kind, c.tol) {
+        (ClaimKind::Distance, _) => "0".to_string(),
+        (_, Some(_)) => format!("tol {}", sci(t)),
+        (_, None) => format!("round-off budget {}", up(t)),
     };
     let via = if balance.is_empty() { String::new() } else { format!(", Q dissipated by {}", balance.join(", ")) };
-    match v {
-        Verdict::Pass(p) if p.claim() == ClaimKind::DimensionalConsistency => {
+    match (v, &c.between) {
+        (Verdict::Pass(_), _) if c.kind == ClaimKind::DimensionalConsistency => {
             format!("{name} PASS  every term is homogeneous and energy-valued")
         }
-        Verdict::Pass(p) => format!(
+        // The bound is −(the margin), rounded up: so the printed margin is rounded down.
+        (Verdict::Pass(p), Some(b)) => format!(
+            "{name} PASS  stays in [{}, {}] with margin ≥ {} certified ({}) over {} checkpoints",
+            b.min,
+            b.max,
+            up(p.bound()).trim_start_matches('-'),
+            method(p.precision()),
+            p.checkpoints()
+        ),
+        (Verdict::Pass(p), None) => format!(
             "{name} PASS  max{q} ≤ {} certified ({}) over {} checkpoints ({}{via})",
             up(p.bound()),
             method(p.precision()),
             p.checkpoints(),
             tol(p.tol())
         ),
-        Verdict::Fail(b) => {
+        (Verdict::Fail(b), _) => {
             format!("{name} FAIL  at step {}: {q} ∈ [{}, {}] > {}{via}", b.step, sci(b.lower), up(b.upper), tol(b.tol))
         }
-        Verdict::Undecided(b) if b.lower.is_nan() => {
+        (Verdict::Undecided(b), _) if b.lower.is_nan() => {
             format!("{name} UNDECIDED  at step {}: the quantity could not be enclosed", b.step)
         }
-        Verdict::Undecided(b) => format!(
+        (Verdict::Undecided(b), _) => format!(
             "{name} UNDECIDED  at step {}: {q} ∈ [{}, {}] straddles {}{via}, even at {}",
             b.step,
             sci(b.lower),
@@ -104,7 +108,7 @@ fn line(v: &Verdict, balance: &[&str], has_tol: bool) -> String {
             tol(b.tol),
             method(b.precision)
         ),
-        Verdict::Refuted { reason, .. } => format!("{name} FAIL  {reason}"),
+        (Verdict::Refuted { reason, .. }, _) => format!("{name} FAIL  {reason}"),
     }
 }
 

@@ -100,7 +100,7 @@ proptest! {
         // a tolerance around the true drift, where the decision is hardest
         let tol = exact.to_f64() * scale;
         prop_assume!(tol > 0.0 && tol.is_finite());
-        let claims = vec![Claim { kind: ClaimKind::EnergyConservation, tol: Some(tol), every: 1 }];
+        let claims = vec![Claim::new(ClaimKind::EnergyConservation, Some(tol), 1)];
         let mut mon = Monitor::new(m, claims, 1).unwrap();
         mon.observe(&a).unwrap();
         let _ = mon.observe(&b);
@@ -117,7 +117,7 @@ proptest! {
 /// A small, valid, sealed certificate.
 fn certificate() -> String {
     let m = model();
-    let claims = vec![Claim { kind: ClaimKind::MomentumConservation, tol: None, every: 1 }];
+    let claims = vec![Claim::new(ClaimKind::MomentumConservation, None, 1)];
     let mut mon = Monitor::new(m.clone(), claims.clone(), 1).unwrap();
     let x = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.0, 0.0]];
     let v = [[0.0; 3]; 3];

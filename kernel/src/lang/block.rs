@@ -129,6 +129,24 @@ impl Reader {
             .collect()
     }
 
+    /// `n` body indices, written `[i, j, ...]` (their range is checked once all bodies are known).
+    pub fn indices(&self, f: &Field, owner: &str, n: usize) -> Result<Vec<(usize, Span)>, Diagnostic> {
+        let bad = || Diagnostic::new(value_span(f), format!("{owner}.{} expects {n} body indices `[i, j]`", f.name));
+        let q = f.value.clone().into_inner().next().expect("a value has one child");
+        let mut parts = q.into_inner();
+        let list = parts.next().filter(|v| v.as_rule() == Rule::vector).ok_or_else(bad)?;
+        let nums: Vec<Pair> = list.into_inner().collect();
+        if nums.len() != n || parts.next().is_some() {
+            return Err(bad());
+        }
+        nums.iter()
+            .map(|p| match p.as_str().parse::<usize>() {
+                Ok(i) => Ok((i, p.as_span().into())),
+                Err(_) => Err(Diagnostic::new(p.as_span().into(), format!("`{}` is not a body index", p.as_str()))),
+            })
+            .collect()
+    }
+
     /// One number of dimension `dim` that must be positive.
     pub fn positive(&self, f: &Field, owner: &str, dim: Dim) -> Result<f64, Diagnostic> {
         let x = self.numbers(f, owner, dim, 1)?[0];

@@ -1,13 +1,13 @@
 //! From the parse tree to a [`Scene`]: templates resolved, terms looked up in the checker's
 //! vocabulary, every number checked for dimension and converted, every index checked.
 
-use super::block::{typed, value_span, word, Block, Reader};
+use super::block::{typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
 use super::{Pair, Rule};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{Scene, Solver};
 use crate::solvers::Integrator;
-use lagra_checker::claims::{Claim, ClaimKind};
+use lagra_checker::claims::{Between, Claim, ClaimKind};
 use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
 use lagra_checker::units::Dim;
@@ -252,21 +252,58 @@ impl<'a> Compiler<'a> {
             let known: Vec<_> = ClaimKind::ALL.iter().map(|k| k.name()).collect();
             Diagnostic::new(at, format!("unknown claim `{}`; known claims: {}", name.as_str(), known.join(", ")))
         })?;
-        if self.claims.iter().any(|c| c.kind == kind) {
+        if !kind.repeatable() && self.claims.iter().any(|c| c.kind == kind) {
             return err(at, format!("{} is declared twice", kind.name()));
         }
-        let tol = match (b.take("tol"), kind.tol_dim()) {
-            (Some(f), Some(dim)) => Some(self.rd.positive(&f, kind.name(), dim)?),
-            _ => None,
-        };
-        if kind.needs_tol() && tol.is_none() {
-            return err(at, format!("{} needs a tolerance: `{{ tol: 1e-5 }}` (relative)", kind.name()));
+        let owner = kind.name();
+        let mut claim = Claim::new(kind, None, 1);
+        if let (Some(f), Some(dim)) = (b.take("tol"), kind.tol_dim()) {
+            claim.tol = Some(self.rd.positive(&f, owner, dim)?);
         }
-        let every =
-            if kind.is_dynamic() { b.take("every").map(|f| self.rd.count(&f, kind.name())).transpose()? } else { None };
-        let allowed: &[&str] = if kind.is_dynamic() { &["tol", "every"] } else { &[] };
-        b.check_names(kind.name(), allowed)?;
-        self.claims.push(Claim { kind, tol, every: every.unwrap_or(1) });
+        if kind.needs_tol() && claim.tol.is_none() {
+            return err(at, format!("{owner} needs a tolerance: `{{ tol: 1e-5 }}` (relative)"));
+        }
+        if kind.is_dynamic() {
+            if let Some(f) = b.take("every") {
+                claim.every = self.rd.count(&f, owner)?;
+            }
+        }
+        let mut allowed = match kind {
+            ClaimKind::DimensionalConsistency => vec![],
+            ClaimKind::Distance => vec!["between", "min", "max", "every"],
+            ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation => vec!["tol", "every", "axes"],
+            ClaimKind::EnergyConservation => vec!["tol", "every"],
+        };
+        if allowed.contains(&"axes") {
+            if let Some(f) = b.take("axes") {
+                claim.axes = Some(axes(&f, owner)?);
+            }
+        }
+        if kind == ClaimKind::Distance {
+            let pair = b.take("between").ok_or_else(|| Diagnostic::new(at, "distance needs `between: [i, j]`"))?;
+            let bodies = self.rd.indices(&pair, owner, 2)?;
+            let mut bound = |name: &str| -> Result<f64, Diagnostic> {
+                let f =
+                    b.take(name).ok_or_else(|| Diagnostic::new(at, format!("distance needs `{name}` (a length)")))?;
+                let x = self.rd.numbers(&f, owner, Dim::LENGTH, 1)?[0];
+                if x < 0.0 {
+                    return err(value_span(&f), format!("distance.{name} must not be negative"));
+                }
+                Ok(x)
+            };
+            let (min, max) = (bound("min")?, bound("max")?);
+            if min > max {
+                return err(at, format!("distance: min {min} is above max {max}"));
+            }
+            if bodies[0].0 == bodies[1].0 {
+                return err(bodies[1].1, "distance needs two different bodies");
+            }
+            claim.between = Some(Between { bodies: [bodies[0].0, bodies[1].0], min, max });
+            self.indices.push(bodies);
+            allowed.clear();
+        }
+        b.check_names(owner, &allowed)?;
+        self.claims.push(claim);
         Ok(())
     }
 
@@ -333,6 +370,22 @@ impl<'a> Compiler<'a> {
             solver,
         })
     }
+}
+
+/// `axes: "xz"`: the momentum components a claim is about.
+fn axes(f: &Field, owner: &str) -> Result<[bool; 3], Diagnostic> {
+    let (text, at) = word(f, owner)?;
+    let mut a = [false; 3];
+    for c in text.chars() {
+        match "xyz".find(c) {
+            Some(i) if !a[i] => a[i] = true,
+            _ => return err(at, format!("{owner}.axes takes some of x, y, z once each, got `{text}`")),
+        }
+    }
+    if a == [false; 3] {
+        return err(at, format!("{owner}.axes names no axis"));
+    }
+    Ok(a)
 }
 
 fn lookup(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, what: &str) -> Result<Kind, Diagnostic> {
