@@ -38,7 +38,7 @@ fn syntax_error_says_what_was_expected() {
 fn unknown_keyword() {
     assert_eq!(error("solver {", "solvr {"), at(5, 3, "unknown term `solvr`; known: gravity"));
     assert_eq!(error("bond harmonic", "bond spring"), at(4, 8, "unknown bond `spring`; known: harmonic"));
-    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency"));
+    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance"));
 }
 
 #[test]
@@ -150,6 +150,44 @@ fn claim_errors() {
         error("  solver", "  @expect momentum_conservation\n  @expect momentum_conservation\n  solver"),
         at(6, 11, "momentum_conservation is declared twice")
     );
+}
+
+#[test]
+fn claims_with_axes_and_bounds() {
+    let src = GOOD.replace(
+        "  solver",
+        "  @expect momentum_conservation { axes: \"zx\" }\n  @expect distance { between: [1, 0], min: 0.5, max: 2 }\n  @expect distance { between: [0, 1], min: 0, max: 9 }\n  solver",
+    );
+    let s = compile(&src).unwrap();
+    assert_eq!(s.claims[0].axes, Some([true, false, true]));
+    assert_eq!(s.claims[0].label(), "momentum_conservation(x, z)");
+    let b = s.claims[1].between.as_ref().unwrap();
+    assert_eq!((b.bodies, b.min, b.max), ([1, 0], 0.5, 2.0));
+    assert_eq!(s.claims.len(), 3, "distance may be declared more than once");
+}
+
+#[test]
+fn claim_field_errors() {
+    let with = |c: &str| error("  solver", &format!("  @expect {c}\n  solver"));
+    assert_eq!(
+        with("momentum_conservation { axes: \"xw\" }"),
+        at(5, 42, "momentum_conservation.axes takes some of x, y, z once each, got `xw`")
+    );
+    assert_eq!(
+        with("energy_conservation { tol: 1e-5, axes: \"x\" }"),
+        at(5, 44, "unknown field `axes` for energy_conservation; expected tol, every")
+    );
+    assert_eq!(
+        with("distance { between: [0, 5], min: 0, max: 1 }"),
+        at(5, 35, "body index 5 is out of range: the scene has 2 entities (0..1)")
+    );
+    assert_eq!(with("distance { between: [0, 1], min: 2, max: 1 }"), at(5, 11, "distance: min 2 is above max 1"));
+    assert_eq!(
+        with("distance { between: [0], min: 0, max: 1 }"),
+        at(5, 31, "distance.between expects 2 body indices `[i, j]`")
+    );
+    assert_eq!(with("distance { min: 0, max: 1 }"), at(5, 11, "distance needs `between: [i, j]`"));
+    assert_eq!(with("distance { between: [1, 1], min: 0, max: 1 }"), at(5, 35, "distance needs two different bodies"));
 }
 
 #[test]
