@@ -81,7 +81,7 @@ fn kepler_passes_every_claim_and_the_third_law() {
     assert_eq!(o.status.code(), Some(0));
     assert_eq!(v["passed"], true);
     let claims = v["claims"].as_array().unwrap();
-    assert_eq!(claims.len(), 4);
+    assert_eq!(claims.len(), 5);
     assert!(claims.iter().all(|c| c["status"] == "PASS"), "{claims:?}");
     let p = &v["predictions"][0];
     assert_eq!(p["name"], "kepler_period");
