@@ -120,7 +120,8 @@ pub struct States {
     pub checksum: u64,
 }
 
-/// One state, owned.
+/// One state, owned: what a state file holds, and what the kernel steps.
+#[derive(Clone, Debug, PartialEq)]
 pub struct State {
     pub step: u64,
     pub t: f64,
