@@ -209,7 +209,7 @@ impl Monitor {
         }
         if let Err(e) = self.model.check_state(s) {
             for t in self.tracks.iter_mut().filter(|t| t.claim.kind.is_dynamic()) {
-                t.stopped = Some(Verdict::Refuted { claim: t.claim.kind, reason: e.clone() });
+                t.stopped.get_or_insert(Verdict::Refuted { claim: t.claim.kind, reason: e.clone() });
             }
             return Err(Halt::InvalidState(e));
         }
