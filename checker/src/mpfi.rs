@@ -85,6 +85,25 @@ impl Mpfi {
         Mpfi { lo: self.lo.max(&o.lo), hi: self.hi.max(&o.hi) }
     }
 
+    /// `f` applied to a non-decreasing function's endpoints, each rounded outward.
+    fn increasing(self, f: impl Fn(&Float, Round) -> Float) -> Mpfi {
+        if self.is_empty() {
+            return self;
+        }
+        Mpfi { lo: f(&self.lo, Round::Down), hi: f(&self.hi, Round::Up) }
+    }
+
+    /// Through a binary64 interval: sound, but no narrower than binary64 (for functions the
+    /// definitions apply only to parameters, such as a dihedral's phase).
+    fn via_binary64(self, f: impl Fn(Interval) -> Interval) -> Mpfi {
+        let p = self.prec();
+        let (lo, hi) = self.bounds();
+        match Interval::try_from((lo, hi)) {
+            Ok(iv) => Mpfi::from_interval(p, f(iv)),
+            Err(_) => Mpfi::empty(p),
+        }
+    }
+
     pub fn bounds(&self) -> (f64, f64) {
         if self.is_empty() {
             (f64::NAN, f64::NAN)
@@ -146,6 +165,57 @@ impl Real for Mpfi {
         Mpfi::point(self.prec(), c)
     }
 
+    fn exp(self) -> Self {
+        let p = self.prec();
+        self.increasing(|x, r| Float::with_val_round(p, x.exp_ref(), r).0)
+    }
+
+    fn ln(self) -> Self {
+        let p = self.prec();
+        if self.is_empty() || self.hi < 0 {
+            return Mpfi::empty(p);
+        }
+        let lo = if self.lo > 0 { down(p, self.lo.ln_ref()) } else { Float::with_val(p, f64::NEG_INFINITY) };
+        Mpfi { lo, hi: up(p, self.hi.ln_ref()) }
+    }
+
+    fn acos(self) -> Self {
+        let p = self.prec();
+        if self.is_empty() || self.lo > 1 || self.hi < -1 {
+            return Mpfi::empty(p);
+        }
+        // decreasing on [−1, 1]: the upper end gives the lower bound
+        let clamp = |x: &Float| x.clone().clamp(&-1, &1);
+        Mpfi { lo: down(p, clamp(&self.hi).acos_ref()), hi: up(p, clamp(&self.lo).acos_ref()) }
+    }
+
+    fn cos(self) -> Self {
+        self.via_binary64(Interval::cos)
+    }
+
+    fn sin(self) -> Self {
+        self.via_binary64(Interval::sin)
+    }
+
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        if self.is_empty() || bound.is_empty() {
+            None
+        } else if self.hi < bound.lo {
+            Some(true)
+        } else if self.lo >= bound.hi {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    fn hull(self, o: Self) -> Self {
+        if self.is_empty() || o.is_empty() {
+            return Mpfi::empty(self.prec());
+        }
+        Mpfi { lo: self.lo.min(&o.lo), hi: self.hi.max(&o.hi) }
+    }
+
     fn sqrt(self) -> Self {
         let p = self.prec();
         if self.is_empty() || self.hi < 0 {
@@ -200,8 +270,17 @@ mod tests {
                 prop_assert!(contains(&x.clone().sqrt(), &Float::with_val(2048, fa.sqrt_ref())));
             }
             if a != 0.0 || n >= 0 {
-                prop_assert!(contains(&x.powi(n), &Float::with_val(2048, (&fa).pow(n))));
+                prop_assert!(contains(&x.clone().powi(n), &Float::with_val(2048, (&fa).pow(n))));
             }
+            let small = Mpfi::point(64, a / 1e5);
+            prop_assert!(contains(&small.exp(), &Float::with_val(2048, Float::with_val(2048, a / 1e5).exp_ref())));
+            if a > 0.0 {
+                prop_assert!(contains(&x.clone().ln(), &Float::with_val(2048, fa.ln_ref())));
+            }
+            let c = Mpfi::point(64, (a / 1e6).clamp(-1.0, 1.0));
+            prop_assert!(contains(&c.clone().acos(), &Float::with_val(2048, Float::with_val(2048, (a / 1e6).clamp(-1.0, 1.0)).acos_ref())));
+            prop_assert!(contains(&x.clone().cos(), &Float::with_val(2048, fa.cos_ref())));
+            prop_assert!(contains(&x.sin(), &Float::with_val(2048, fa.sin_ref())));
         }
     }
 

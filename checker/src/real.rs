@@ -18,6 +18,26 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// `self^n`; for intervals this is tighter than repeated multiplication (x² ≥ 0).
     fn powi(self, n: i32) -> Self;
+    fn exp(self) -> Self;
+    fn ln(self) -> Self;
+    /// The angle in [0, π] whose cosine is `self` (clamped to [−1, 1]).
+    fn acos(self) -> Self;
+    fn cos(self) -> Self;
+    fn sin(self) -> Self;
+    /// Whether `self < bound`: always decided for a point, `None` when an enclosure straddles.
+    fn lt(&self, bound: &Self) -> Option<bool>;
+    /// The smallest value of the kind holding both; only reached when `lt` was undecided.
+    fn hull(self, o: Self) -> Self;
+}
+
+/// `yes` if `cond`, `no` if not, and for an undecided enclosure the hull of both: the cutoff
+/// primitive, exact for points and sound for intervals.
+pub fn select<R: Real>(cond: Option<bool>, yes: R, no: R) -> R {
+    match cond {
+        Some(true) => yes,
+        Some(false) => no,
+        None => yes.hull(no),
+    }
 }
 
 impl Real for f64 {
@@ -30,6 +50,27 @@ impl Real for f64 {
     fn powi(self, n: i32) -> Self {
         f64::powi(self, n)
     }
+    fn exp(self) -> Self {
+        f64::exp(self)
+    }
+    fn ln(self) -> Self {
+        f64::ln(self)
+    }
+    fn acos(self) -> Self {
+        f64::acos(self.clamp(-1.0, 1.0))
+    }
+    fn cos(self) -> Self {
+        f64::cos(self)
+    }
+    fn sin(self) -> Self {
+        f64::sin(self)
+    }
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        (!self.is_nan() && !bound.is_nan()).then(|| self < bound)
+    }
+    fn hull(self, _: Self) -> Self {
+        f64::NAN
+    }
 }
 
 impl Real for Interval {
@@ -41,6 +82,35 @@ impl Real for Interval {
     }
     fn powi(self, n: i32) -> Self {
         Interval::powi(self, n)
+    }
+    fn exp(self) -> Self {
+        Interval::exp(self)
+    }
+    fn ln(self) -> Self {
+        Interval::ln(self)
+    }
+    fn acos(self) -> Self {
+        Interval::acos(self)
+    }
+    fn cos(self) -> Self {
+        Interval::cos(self)
+    }
+    fn sin(self) -> Self {
+        Interval::sin(self)
+    }
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        if self.is_empty() || bound.is_empty() {
+            None
+        } else if self.sup() < bound.inf() {
+            Some(true)
+        } else if self.inf() >= bound.sup() {
+            Some(false)
+        } else {
+            None
+        }
+    }
+    fn hull(self, o: Self) -> Self {
+        self.convex_hull(o)
     }
 }
 
@@ -58,6 +128,27 @@ impl Real for Float {
     }
     fn powi(self, n: i32) -> Self {
         rug::ops::Pow::pow(self, n)
+    }
+    fn exp(self) -> Self {
+        Float::exp(self)
+    }
+    fn ln(self) -> Self {
+        Float::ln(self)
+    }
+    fn acos(self) -> Self {
+        Float::acos(self.clamp(&-1, &1))
+    }
+    fn cos(self) -> Self {
+        Float::cos(self)
+    }
+    fn sin(self) -> Self {
+        Float::sin(self)
+    }
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        (!self.is_nan() && !bound.is_nan()).then(|| self < bound)
+    }
+    fn hull(self, o: Self) -> Self {
+        Float::with_val(self.prec(), f64::NAN) + o
     }
 }
 

@@ -156,6 +156,35 @@ impl Real for Dimension {
     fn powi(self, n: i32) -> Self {
         Dimension(self.0.map(|d| d.pow(n as i8)))
     }
+    fn exp(self) -> Self {
+        self.pure("exp")
+    }
+    fn ln(self) -> Self {
+        self.pure("ln")
+    }
+    fn acos(self) -> Self {
+        self.pure("acos")
+    }
+    fn cos(self) -> Self {
+        self.pure("cos")
+    }
+    fn sin(self) -> Self {
+        self.pure("sin")
+    }
+    /// A dimension has no value to compare; both branches of a cutoff are checked.
+    fn lt(&self, _: &Self) -> Option<bool> {
+        None
+    }
+    fn hull(self, o: Self) -> Self {
+        self.same(o, "choice")
+    }
+}
+
+impl Dimension {
+    /// A transcendental function takes and gives pure numbers.
+    fn pure(self, f: &str) -> Self {
+        Dimension(self.0.and_then(|d| if d == Dim::NONE { Ok(d) } else { Err(format!("{f} of {d}")) }))
+    }
 }
 
 #[cfg(test)]

@@ -54,6 +54,29 @@ impl Real for Dual {
     fn powi(self, n: i32) -> Self {
         Dual { v: self.v.powi(n), d: n as f64 * self.v.powi(n - 1) * self.d }
     }
+    fn exp(self) -> Self {
+        let e = self.v.exp();
+        Dual { v: e, d: e * self.d }
+    }
+    fn ln(self) -> Self {
+        Dual { v: self.v.ln(), d: self.d / self.v }
+    }
+    fn acos(self) -> Self {
+        let c = self.v.clamp(-1.0, 1.0);
+        Dual { v: c.acos(), d: -self.d / (1.0 - c * c).sqrt() }
+    }
+    fn cos(self) -> Self {
+        Dual { v: self.v.cos(), d: -self.v.sin() * self.d }
+    }
+    fn sin(self) -> Self {
+        Dual { v: self.v.sin(), d: self.v.cos() * self.d }
+    }
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        Some(self.v < bound.v)
+    }
+    fn hull(self, _: Self) -> Self {
+        self
+    }
 }
 
 /// A small deterministic generator (SplitMix64), so a failing case reproduces from its seed.
