@@ -46,10 +46,41 @@ impl TermInstance {
     }
 }
 
+/// A box, periodic along some axes: pair and bond terms see the nearest image.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cell {
+    pub size: [f64; 3],
+    pub periodic: [bool; 3],
+}
+
+impl Cell {
+    /// How many box lengths to take off a displacement `d` along each axis to reach its nearest
+    /// image: round(d/L) on periodic axes, 0 elsewhere. Kernel and checker both choose images
+    /// with this one function.
+    pub fn shift(cell: &Option<Cell>, d: [f64; 3]) -> [f64; 3] {
+        match cell {
+            None => [0.0; 3],
+            Some(c) => std::array::from_fn(|a| if c.periodic[a] { (d[a] / c.size[a]).round() } else { 0.0 }),
+        }
+    }
+
+    /// The nearest image of the displacement `d`, in binary64 (the kernel's fast path).
+    pub fn image(cell: &Option<Cell>, d: [f64; 3]) -> [f64; 3] {
+        let k = Cell::shift(cell, d);
+        match cell {
+            None => d,
+            Some(c) => std::array::from_fn(|a| d[a] - k[a] * c.size[a]),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Model {
     pub units: UnitSystem,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell: Option<Cell>,
     pub bodies: Vec<Body>,
     pub terms: Vec<TermInstance>,
 }
@@ -68,6 +99,11 @@ impl Model {
     pub fn validate(&self) -> Result<(), String> {
         if self.bodies.is_empty() {
             return Err("the scene has no bodies".into());
+        }
+        if let Some(c) = &self.cell {
+            if c.size.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+                return Err(format!("the box size must be finite and positive, got {:?}", c.size));
+            }
         }
         for (i, b) in self.bodies.iter().enumerate() {
             if !(b.mass.is_finite() && b.mass > 0.0) {

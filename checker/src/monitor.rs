@@ -352,6 +352,7 @@ mod tests {
     fn model() -> Model {
         Model {
             units: UnitSystem::Reduced,
+            cell: None,
             bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 1.0, charge: 0.0 }],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
         }
@@ -437,6 +438,7 @@ mod tests {
     fn cancelling() -> (Model, [[f64; 3]; 1], [[f64; 3]; 1]) {
         let model = Model {
             units: UnitSystem::Reduced,
+            cell: None,
             bodies: vec![Body { mass: 1.0, charge: 0.0 }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
         };

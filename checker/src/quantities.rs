@@ -101,6 +101,7 @@ mod tests {
     fn model(k: f64, r0: f64, gamma: f64, g: f64) -> Model {
         Model {
             units: UnitSystem::Reduced,
+            cell: None,
             bodies: vec![
                 Body { mass: 1.0, charge: 0.0 },
                 Body { mass: 2.5, charge: 0.0 },

@@ -68,6 +68,7 @@ proptest! {
 fn model() -> Model {
     Model {
         units: UnitSystem::Reduced,
+        cell: None,
         bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 2.0, charge: 0.0 }, Body { mass: 0.5, charge: 0.0 }],
         terms: vec![
             TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![3.0, 1.0, 0.0] },

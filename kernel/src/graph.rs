@@ -9,6 +9,7 @@ use lagra_checker::terms::Kind;
 
 pub struct LagrangianGraph {
     pub masses: Vec<f64>,
+    charges: Vec<f64>,
     groups: Vec<(Kind, Box<dyn Force>)>,
 }
 
@@ -21,7 +22,8 @@ impl LagrangianGraph {
                 groups.push((kind, group(kind, &instances, model)));
             }
         }
-        LagrangianGraph { masses: model.bodies.iter().map(|b| b.mass).collect(), groups }
+        let masses = model.bodies.iter().map(|b| b.mass).collect();
+        LagrangianGraph { masses, charges: model.bodies.iter().map(|b| b.charge).collect(), groups }
     }
 
     /// The kinds present, in dispatch order.
@@ -30,14 +32,14 @@ impl LagrangianGraph {
     }
 
     /// Whether any group has a velocity-dependent force.
-    pub fn dissipative(&self) -> bool {
-        self.groups.iter().any(|g| g.1.dissipative())
+    pub fn velocity_dependent(&self) -> bool {
+        self.groups.iter().any(|g| g.1.velocity_dependent())
     }
 
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
-        let frame = Frame { x: &s.x, v: &s.v, m: &self.masses };
+        let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges };
         let mut potential = 0.0;
         for (_, g) in &self.groups {
             potential += g.accumulate(&frame, f)?;

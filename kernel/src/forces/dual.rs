@@ -110,15 +110,14 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     }
     let sites = if matches!(kind.spec().shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
     let term = TermInstance { kind, sites, params: params.to_vec() };
-    let model = Model {
-        units: UnitSystem::Reduced,
-        bodies: m.iter().map(|&mass| Body { mass, charge: 0.0 }).collect(),
-        terms: vec![term.clone()],
-    };
+    let q: Vec<f64> = (0..n).map(|_| rng.uniform(-2.0, 2.0)).collect();
+    let bodies = m.iter().zip(&q).map(|(&mass, &charge)| Body { mass, charge }).collect();
+    let model = Model { units: UnitSystem::Reduced, cell: None, bodies, terms: vec![term.clone()] };
 
     let mut fast = vec![[0.0; 3]; n];
-    let energy =
-        group(kind, &[&term], &model).accumulate(&Frame { x: &x, v: &v, m: &m }, &mut fast).expect("no singularity");
+    let energy = group(kind, &[&term], &model)
+        .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q }, &mut fast)
+        .expect("no singularity");
 
     // The definition at a state where coordinate (b, c) of x (or v) carries the derivative.
     let eval = |b: usize, c: usize, of_velocity: bool| -> (Dual, Option<Dual>) {
@@ -135,7 +134,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
                     x: std::array::from_fn(|k| Dual { v: x[i][k], d: seed(k, false) }),
                     v: std::array::from_fn(|k| Dual { v: v[i][k], d: seed(k, true) }),
                     m: Dual { v: m[i], d: 0.0 },
-                    q: Dual { v: 0.0, d: 0.0 },
+                    q: Dual { v: q[i], d: 0.0 },
                 }
             })
             .collect();

@@ -1,44 +1,19 @@
-//! Newtonian gravity over all pairs: F_i = G m_i m_j (x_j − x_i)/r³, F_j = −F_i.
+//! Newtonian gravity: on body i, G mᵢ mⱼ d / r³ with d = xⱼ − xᵢ.
 
-use super::{apply_pair, Force, Frame, Singularity};
-use lagra_checker::model::{Model, TermInstance};
-use nalgebra::Vector3;
+use super::Paired;
 
-pub struct PairGravity {
-    /// G·m_i·m_j for every pair i < j, in loop order.
-    strength: Vec<f64>,
-    n: usize,
-}
+pub struct Fast;
 
-impl PairGravity {
-    pub fn new(t: &[&TermInstance], model: &Model) -> Self {
-        let g: f64 = t.iter().map(|t| t.params[0]).sum();
-        let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
-        let n = m.len();
-        let strength = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).map(|(i, j)| g * m[i] * m[j]).collect();
-        PairGravity { strength, n }
-    }
-}
-
-impl Force for PairGravity {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
-        let mut p = 0;
-        for i in 0..self.n {
-            for j in i + 1..self.n {
-                let d = Vector3::from(s.x[j]) - Vector3::from(s.x[i]);
-                let r2 = d.norm_squared();
-                if r2 == 0.0 {
-                    return Err(Singularity { term: "Gravity", i, j });
-                }
-                let r = r2.sqrt();
-                let gmm = self.strength[p];
-                apply_pair(f, i, j, (d * (gmm / (r2 * r))).into());
-                energy -= gmm / r;
-                p += 1;
-            }
+impl Paired for Fast {
+    fn eval(p: &[f64], d: [f64; 3], [mi, mj, _, _]: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if r2 == 0.0 {
+            return Err("at the same point, where gravity is infinite");
         }
-        Ok(energy)
+        let r = r2.sqrt();
+        let gmm = p[0] * mi * mj;
+        let s = gmm / (r2 * r);
+        Ok((d.map(|c| c * s), -gmm / r))
     }
 }
 

@@ -1,48 +1,26 @@
-//! Springs, with damping along the bond: F_j = −(k(r − r₀) + γṙ) r̂, F_i = −F_j.
+//! Springs, with damping along the bond: F₁ = −(k(r − r₀) + γṙ) r̂, F₀ = −F₁.
 
-use super::{apply_pair, Force, Frame, Singularity};
-use lagra_checker::model::TermInstance;
-use nalgebra::Vector3;
+use super::Bonded;
 
-pub struct HarmonicBonds {
-    ends: Vec<(usize, usize)>,
-    k: Vec<f64>,
-    r0: Vec<f64>,
-    gamma: Vec<f64>,
-}
+pub struct Fast;
 
-impl HarmonicBonds {
-    pub fn new(t: &[&TermInstance]) -> Self {
-        HarmonicBonds {
-            ends: t.iter().map(|t| (t.sites[0], t.sites[1])).collect(),
-            k: t.iter().map(|t| t.params[0]).collect(),
-            r0: t.iter().map(|t| t.params[1]).collect(),
-            gamma: t.iter().map(|t| t.params[2]).collect(),
+impl Bonded<2> for Fast {
+    fn eval(p: &[f64], x: &[[f64; 3]; 2], v: &[[f64; 3]; 2]) -> Result<([[f64; 3]; 2], f64), &'static str> {
+        let (k, r0, gamma) = (p[0], p[1], p[2]);
+        let d: [f64; 3] = std::array::from_fn(|c| x[1][c] - x[0][c]);
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if r == 0.0 {
+            return Err("at the same point, where the bond's direction is undefined");
         }
-    }
-}
-
-impl Force for HarmonicBonds {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
-        for (b, &(i, j)) in self.ends.iter().enumerate() {
-            let d = Vector3::from(s.x[j]) - Vector3::from(s.x[i]);
-            let r = d.norm();
-            if r == 0.0 {
-                return Err(Singularity { term: "HarmonicBond", i, j });
-            }
-            let u = d / r;
-            let stretch = r - self.r0[b];
-            let rdot = (Vector3::from(s.v[j]) - Vector3::from(s.v[i])).dot(&u);
-            let along = self.k[b] * stretch + self.gamma[b] * rdot;
-            apply_pair(f, i, j, (u * along).into());
-            energy += 0.5 * self.k[b] * stretch * stretch;
-        }
-        Ok(energy)
+        let u = d.map(|c| c / r);
+        let rdot: f64 = (0..3).map(|c| (v[1][c] - v[0][c]) * u[c]).sum();
+        let along = k * (r - r0) + gamma * rdot;
+        let a = u.map(|c| c * along);
+        Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))
     }
 
-    fn dissipative(&self) -> bool {
-        self.gamma.iter().any(|&g| g != 0.0)
+    fn velocity_dependent(p: &[f64]) -> bool {
+        p[2] != 0.0
     }
 }
 

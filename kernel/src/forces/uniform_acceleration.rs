@@ -1,29 +1,12 @@
-//! A uniform field: F_i = m_i g. Several fields add into one.
+//! A uniform field: F = m g.
 
-use super::{Force, Frame, Singularity};
-use lagra_checker::model::TermInstance;
+use super::Field;
 
-pub struct UniformField {
-    g: [f64; 3],
-}
+pub struct Fast;
 
-impl UniformField {
-    pub fn new(t: &[&TermInstance]) -> Self {
-        let g = std::array::from_fn(|c| t.iter().map(|t| t.params[c]).sum());
-        UniformField { g }
-    }
-}
-
-impl Force for UniformField {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
-        for ((x, &m), fi) in s.x.iter().zip(s.m).zip(f.iter_mut()) {
-            for c in 0..3 {
-                fi[c] += m * self.g[c];
-                energy -= m * self.g[c] * x[c];
-            }
-        }
-        Ok(energy)
+impl Field for Fast {
+    fn eval(g: &[f64], x: &[f64; 3], _v: &[f64; 3], m: f64, _q: f64) -> Result<([f64; 3], f64), &'static str> {
+        Ok(([m * g[0], m * g[1], m * g[2]], -m * (g[0] * x[0] + g[1] * x[1] + g[2] * x[2])))
     }
 }
 

@@ -348,7 +348,7 @@ impl<'a> Compiler<'a> {
             }
         }
         let solver = self.solver.ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
-        let model = Model { units: self.rd.system, bodies: self.bodies, terms: self.terms };
+        let model = Model { units: self.rd.system, cell: None, bodies: self.bodies, terms: self.terms };
         let predictions = self
             .predictions
             .into_iter()

@@ -36,7 +36,7 @@ impl VelocityVerlet {
                 x[c] += dt * v[c];
             }
         }
-        let half = if g.dissipative() { Some(s.v.clone()) } else { None };
+        let half = if g.velocity_dependent() { Some(s.v.clone()) } else { None };
         self.potential = g.forces(s, &mut self.f)?;
         kick(&mut s.v, &self.f, &g.masses, h);
         if let Some(half) = half {
@@ -72,6 +72,7 @@ mod tests {
     fn pair(gamma: f64) -> (LagrangianGraph, State) {
         let model = Model {
             units: UnitSystem::Reduced,
+            cell: None,
             bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 3.0, charge: 0.0 }],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
         };
@@ -133,6 +134,9 @@ mod tests {
         let (g, mut s) = pair(0.0);
         s.x[1] = s.x[0];
         let err = VelocityVerlet::new(&g, &s).err().unwrap();
-        assert_eq!(err.to_string(), "HarmonicBond: bodies 0 and 1 are at the same point, where the force is undefined");
+        assert_eq!(
+            err.to_string(),
+            "HarmonicBond: bodies 0, 1: at the same point, where the bond's direction is undefined"
+        );
     }
 }

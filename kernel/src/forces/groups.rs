@@ -1,0 +1,156 @@
+//! The three loops every term runs in: over listed bodies, over all pairs, over each body.
+
+use super::{Bonded, Field, Force, Frame, Paired, Singularity};
+use lagra_checker::model::{Cell, Model, TermInstance};
+use lagra_checker::terms::Kind;
+use std::marker::PhantomData;
+
+/// Each instance's parameters, flattened: row k is `params[k*w .. (k+1)*w]`.
+struct Rows {
+    params: Vec<f64>,
+    w: usize,
+    n: usize,
+}
+
+impl Rows {
+    fn new(kind: Kind, t: &[&TermInstance]) -> Rows {
+        Rows { params: t.iter().flat_map(|t| t.params.iter().copied()).collect(), w: kind.spec().width(), n: t.len() }
+    }
+    fn iter(&self) -> impl Iterator<Item = &[f64]> {
+        (0..self.n).map(|k| self.row(k))
+    }
+    fn row(&self, k: usize) -> &[f64] {
+        &self.params[k * self.w..(k + 1) * self.w]
+    }
+}
+
+fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub struct Bonds<T, const N: usize> {
+    name: &'static str,
+    sites: Vec<[usize; N]>,
+    rows: Rows,
+    cell: Option<Cell>,
+    velocity: bool,
+    term: PhantomData<T>,
+}
+
+impl<T: Bonded<N> + Send + Sync + 'static, const N: usize> Bonds<T, N> {
+    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
+        let rows = Rows::new(kind, t);
+        let velocity = (0..t.len()).any(|k| T::velocity_dependent(rows.row(k)));
+        let sites = t.iter().map(|t| std::array::from_fn(|i| t.sites[i])).collect();
+        Box::new(Bonds::<T, N> { name: kind.name(), sites, rows, cell: m.cell, velocity, term: PhantomData })
+    }
+}
+
+impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let mut energy = 0.0;
+        for (k, b) in self.sites.iter().enumerate() {
+            // positions relative to the first body, by minimum image in a periodic cell
+            let x0 = s.x[b[0]];
+            let x: [[f64; 3]; N] = std::array::from_fn(|i| {
+                let d = Cell::image(&self.cell, sub(&s.x[b[i]], &x0));
+                [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
+            });
+            let v: [[f64; 3]; N] = std::array::from_fn(|i| s.v[b[i]]);
+            let (fs, e) = T::eval(self.rows.row(k), &x, &v).map_err(|what| Singularity {
+                term: self.name,
+                bodies: b.to_vec(),
+                what,
+            })?;
+            for (i, fi) in b.iter().zip(fs) {
+                for c in 0..3 {
+                    f[*i][c] += fi[c];
+                }
+            }
+            energy += e;
+        }
+        Ok(energy)
+    }
+    fn velocity_dependent(&self) -> bool {
+        self.velocity
+    }
+}
+
+pub struct Pairs<T> {
+    name: &'static str,
+    rows: Rows,
+    cell: Option<Cell>,
+    term: PhantomData<T>,
+}
+
+impl<T: Paired + Send + Sync + 'static> Pairs<T> {
+    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
+        Box::new(Pairs::<T> { name: kind.name(), rows: Rows::new(kind, t), cell: m.cell, term: PhantomData })
+    }
+}
+
+impl<T: Paired + Send + Sync> Force for Pairs<T> {
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let mut energy = 0.0;
+        for i in 0..s.x.len() {
+            for j in i + 1..s.x.len() {
+                let d = Cell::image(&self.cell, sub(&s.x[j], &s.x[i]));
+                for p in self.rows.iter() {
+                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]]).map_err(|what| Singularity {
+                        term: self.name,
+                        bodies: vec![i, j],
+                        what,
+                    })?;
+                    // applied so that the two are exactly opposite
+                    for c in 0..3 {
+                        f[i][c] += a[c];
+                        f[j][c] -= a[c];
+                    }
+                    energy += e;
+                }
+            }
+        }
+        Ok(energy)
+    }
+    fn velocity_dependent(&self) -> bool {
+        false
+    }
+}
+
+pub struct Fields<T> {
+    name: &'static str,
+    rows: Rows,
+    velocity: bool,
+    term: PhantomData<T>,
+}
+
+impl<T: Field + Send + Sync + 'static> Fields<T> {
+    pub fn boxed(kind: Kind, t: &[&TermInstance]) -> Box<dyn Force> {
+        let rows = Rows::new(kind, t);
+        let velocity = rows.iter().any(T::velocity_dependent);
+        Box::new(Fields::<T> { name: kind.name(), rows, velocity, term: PhantomData })
+    }
+}
+
+impl<T: Field + Send + Sync> Force for Fields<T> {
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let mut energy = 0.0;
+        for (i, fi) in f.iter_mut().enumerate() {
+            for p in self.rows.iter() {
+                let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i]).map_err(|what| Singularity {
+                    term: self.name,
+                    bodies: vec![i],
+                    what,
+                })?;
+                for c in 0..3 {
+                    fi[c] += a[c];
+                }
+                energy += e;
+            }
+        }
+        Ok(energy)
+    }
+    fn velocity_dependent(&self) -> bool {
+        self.velocity
+    }
+}
