@@ -1,15 +1,19 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
-use crate::model::{Model, Snapshot};
+use crate::model::{Cell, Model, Snapshot};
+use std::borrow::Cow;
 use crate::real::{norm2, sub3, Real, Vec3};
-use crate::terms::{Shape, Site};
+use crate::terms::{Kind, Shape, Site};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
     sites: Vec<Site<R>>,
     params: Vec<Vec<R>>,
     zero: R,
+    /// The exact positions, to choose periodic images from.
+    x: Vec<[f64; 3]>,
+    cell: Option<Cell>,
 }
 
 impl<R: Real> Lifted<R> {
@@ -22,20 +26,41 @@ impl<R: Real> Lifted<R> {
             .map(|(b, (x, v))| Site { x: lift3(x), v: lift3(v), m: proto.lift(b.mass), q: proto.lift(b.charge) })
             .collect();
         let params = model.terms.iter().map(|t| t.params.iter().map(|&c| proto.lift(c)).collect()).collect();
-        Lifted { sites, params, zero: proto.lift(0.0) }
+        Lifted { sites, params, zero: proto.lift(0.0), x: s.x.to_vec(), cell: model.cell }
     }
 
-    /// Calls `f` with the sites of every instance of every term, in a fixed order.
-    fn each_instance(&self, model: &Model, mut f: impl FnMut(usize, &[&Site<R>])) {
-        let all = &self.sites;
-        for (n, t) in model.terms.iter().enumerate() {
+    /// Site `j` as seen from site `i`: itself, or in a periodic cell its nearest image,
+    /// x_j − k·L with k chosen from the exact positions (`Cell::shift`) and the shift evaluated
+    /// in `R`.
+    fn seen_from(&self, i: usize, j: usize) -> Cow<'_, Site<R>> {
+        let d = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
+        let k = Cell::shift(&self.cell, d);
+        match &self.cell {
+            Some(c) if k != [0.0; 3] => {
+                let mut s = self.sites[j].clone();
+                for a in 0..3 {
+                    s.x[a] = s.x[a].clone() - self.zero.lift(k[a]) * self.zero.lift(c.size[a]);
+                }
+                Cow::Owned(s)
+            }
+            _ => Cow::Borrowed(&self.sites[j]),
+        }
+    }
+
+    /// Calls `f` with the sites of every instance of every term, in a fixed order; pairs and
+    /// bonds see each other's nearest periodic image.
+    fn each_instance(&self, model: &Model, kinds: impl Fn(Kind) -> bool, mut f: impl FnMut(usize, &[&Site<R>])) {
+        for (n, t) in model.terms.iter().enumerate().filter(|(_, t)| kinds(t.kind)) {
             match t.kind.spec().shape {
-                Shape::Bond(_) => f(n, &t.sites.iter().map(|&i| &all[i]).collect::<Vec<_>>()),
-                Shape::External => all.iter().for_each(|s| f(n, &[s])),
+                Shape::Bond(_) => {
+                    let seen: Vec<Cow<Site<R>>> = t.sites.iter().map(|&j| self.seen_from(t.sites[0], j)).collect();
+                    f(n, &seen.iter().map(|s| s.as_ref()).collect::<Vec<_>>());
+                }
+                Shape::External => self.sites.iter().for_each(|s| f(n, &[s])),
                 Shape::Pairwise => {
-                    for i in 0..all.len() {
-                        for j in i + 1..all.len() {
-                            f(n, &[&all[i], &all[j]]);
+                    for i in 0..self.sites.len() {
+                        for j in i + 1..self.sites.len() {
+                            f(n, &[&self.sites[i], &self.seen_from(i, j)]);
                         }
                     }
                 }
@@ -50,7 +75,7 @@ impl<R: Real> Lifted<R> {
 
     pub fn potential(&self, model: &Model) -> R {
         let mut v = self.zero.clone();
-        self.each_instance(model, |n, s| v = v.clone() + model.terms[n].kind.potential(&self.params[n], s));
+        self.each_instance(model, |_| true, |n, s| v = v.clone() + model.terms[n].kind.potential(&self.params[n], s));
         v
     }
 
@@ -62,7 +87,8 @@ impl<R: Real> Lifted<R> {
     /// The rate 2·ΣF at which the dissipative terms remove energy, and which terms do.
     pub fn dissipated_power(&self, model: &Model) -> R {
         let mut p = self.zero.clone();
-        self.each_instance(model, |n, s| {
+        // only the kinds that can dissipate: an all-pairs term is never visited for nothing
+        self.each_instance(model, Kind::dissipative, |n, s| {
             if let Some(f) = model.terms[n].kind.rayleigh(&self.params[n], s) {
                 p = p.clone() + self.zero.lift(2.0) * f;
             }
@@ -70,9 +96,9 @@ impl<R: Real> Lifted<R> {
         p
     }
 
-    /// |x_j − x_i|.
+    /// |x_j − x_i|, to the nearest periodic image.
     pub fn distance(&self, i: usize, j: usize) -> R {
-        norm2(&sub3(&self.sites[j].x, &self.sites[i].x)).sqrt()
+        norm2(&sub3(&self.seen_from(i, j).x, &self.sites[i].x)).sqrt()
     }
 
     pub fn momentum(&self) -> Vec3<R> {

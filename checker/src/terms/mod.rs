@@ -6,6 +6,7 @@
 use crate::real::{Real, Vec3};
 use crate::units::{Dim, Dimension};
 use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
 
 /// What a term sees of one body: position, velocity, mass and charge.
 #[derive(Clone, Debug)]
@@ -138,9 +139,10 @@ impl Kind {
         (self.potential(&p, &s), self.rayleigh(&p, &s))
     }
 
-    /// Whether the definition has a dissipation function.
+    /// Whether the definition has a dissipation function (worked out once per kind).
     pub fn dissipative(self) -> bool {
-        self.dimensions().1.is_some()
+        static TABLE: OnceLock<Vec<bool>> = OnceLock::new();
+        TABLE.get_or_init(|| Kind::ALL.iter().map(|k| k.dimensions().1.is_some()).collect())[self as usize]
     }
 
     /// Proves the definition homogeneous: its potential is an energy and its dissipation
