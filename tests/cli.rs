@@ -142,7 +142,12 @@ fn bad_input_is_one_located_line_a_caret_and_exit_2() {
         ("k: 2.0", "k: 2.0 C", "units", "HarmonicBond.k expects M·T⁻² (energy/length²), found Q (charge)"),
         ("[0, 1]", "[0, 7]", "index", "body index 7 is out of range: the scene has 2 entities (0..1)"),
         ("mass: 1.0 }", "mass: 1.0, mass: 2 }", "duplicate", "duplicate field `mass`"),
-        ("bond harmonic", "bond elastic", "keyword", "unknown bond `elastic`; known: harmonic"),
+        (
+            "bond harmonic",
+            "bond elastic",
+            "keyword",
+            "unknown bond `elastic`; known: harmonic, morse, fene, angle, dihedral",
+        ),
         ("position: [-1.35", "position: [-1e400", "nonfinite", "non-finite number `-1e400`"),
     ];
     for (from, to, name, message) in cases {

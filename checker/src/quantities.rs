@@ -2,9 +2,9 @@
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
 use crate::model::{Cell, Model, Snapshot};
-use std::borrow::Cow;
 use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Kind, Shape, Site};
+use std::borrow::Cow;
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {

@@ -163,6 +163,13 @@ pub fn dot3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {
     a[0].clone() * b[0].clone() + a[1].clone() * b[1].clone() + a[2].clone() * b[2].clone()
 }
 
+pub fn cross3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
+    std::array::from_fn(|c| {
+        let (i, j) = ((c + 1) % 3, (c + 2) % 3);
+        a[i].clone() * b[j].clone() - a[j].clone() * b[i].clone()
+    })
+}
+
 /// |a|², written with `powi` so that an interval enclosure stays non-negative and tight.
 pub fn norm2<R: Real>(a: &Vec3<R>) -> R {
     a[0].clone().powi(2) + a[1].clone().powi(2) + a[2].clone().powi(2)

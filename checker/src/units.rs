@@ -25,6 +25,13 @@ impl Dim {
     pub const STIFFNESS: Dim = Dim([1, 0, -2, 0]);
     pub const DAMPING: Dim = Dim([1, 0, -1, 0]);
     pub const GRAVITATIONAL: Dim = Dim([-1, 3, -2, 0]);
+    pub const INVERSE_LENGTH: Dim = Dim([0, -1, 0, 0]);
+    /// Energy × length: the strength of a 1/r potential between neutral bodies.
+    pub const ENERGY_LENGTH: Dim = Dim([1, 3, -2, 0]);
+    /// Coulomb's constant: energy × length / charge².
+    pub const COULOMB: Dim = Dim([1, 3, -2, -2]);
+    /// Electric field: force / charge.
+    pub const ELECTRIC: Dim = Dim([1, 1, -2, -1]);
 
     pub fn pow(self, n: i8) -> Dim {
         Dim(self.0.map(|e| e * n))
@@ -32,7 +39,11 @@ impl Dim {
 
     /// A name for the common dimensions, used in error messages.
     pub fn describe(self) -> Option<&'static str> {
-        const NAMES: [(Dim, &str); 12] = [
+        const NAMES: [(Dim, &str); 16] = [
+            (Dim::INVERSE_LENGTH, "1/length"),
+            (Dim::ENERGY_LENGTH, "energy·length"),
+            (Dim::COULOMB, "energy·length/charge²"),
+            (Dim::ELECTRIC, "force/charge"),
             (Dim::NONE, "dimensionless"),
             (Dim::MASS, "mass"),
             (Dim::LENGTH, "length"),

@@ -48,7 +48,7 @@ proptest! {
     fn every_term_enclosure_holds_the_mpfr_value(
         params in prop::collection::vec(0.01f64..100.0, 8),
         signs in prop::collection::vec(any::<bool>(), 8),
-        bodies in prop::collection::vec(body(), 2),
+        bodies in prop::collection::vec(body(), 4),
     ) {
         for &kind in Kind::ALL {
             let w = kind.spec().width();
@@ -57,9 +57,10 @@ proptest! {
             let params: Vec<f64> = params[..w].iter().zip(&signs).map(|(&p, &s)| if vector && s { -p } else { p }).collect();
             let (iv, iv_f) = eval(kind, &params, &bodies, &Interval::EMPTY);
             let (hp, hp_f) = eval(kind, &params, &bodies, &Float::new(BITS));
-            prop_assert!(inside(iv, &hp), "{kind:?}: {iv} does not hold {hp}");
+            // where the definition is undefined (FENE past R₀) there is nothing to enclose
+            prop_assert!(hp.is_nan() || inside(iv, &hp), "{kind:?}: {iv} does not hold {hp}");
             if let (Some(a), Some(b)) = (iv_f, hp_f) {
-                prop_assert!(inside(a, &b), "{kind:?} dissipation: {a} does not hold {b}");
+                prop_assert!(b.is_nan() || inside(a, &b), "{kind:?} dissipation: {a} does not hold {b}");
             }
         }
     }

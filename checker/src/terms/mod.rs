@@ -114,8 +114,19 @@ macro_rules! vocabulary {
 
 vocabulary! {
     HarmonicBond => harmonic_bond,
-    UniformAcceleration => uniform_acceleration,
+    MorseBond => morse_bond,
+    FeneBond => fene_bond,
+    HarmonicAngle => harmonic_angle,
+    Dihedral => dihedral,
     Gravity => gravity,
+    Coulomb => coulomb,
+    Yukawa => yukawa,
+    NuclearYukawa => nuclear_yukawa,
+    UniformAcceleration => uniform_acceleration,
+    GravityWell => gravity_well,
+    HarmonicTrap => harmonic_trap,
+    ElectricField => electric_field,
+    Drag => drag,
 }
 
 impl Kind {
@@ -190,8 +201,8 @@ mod tests {
     }
 
     #[test]
-    fn only_harmonic_bond_dissipates() {
+    fn only_damped_bonds_and_drag_dissipate() {
         let d: Vec<_> = Kind::ALL.iter().filter(|k| k.dissipative()).collect();
-        assert_eq!(d, [&Kind::HarmonicBond]);
+        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag]);
     }
 }

@@ -1,19 +1,13 @@
-//! Newtonian gravity: on body i, G mᵢ mⱼ d / r³ with d = xⱼ − xᵢ.
+//! Newtonian gravity: V = −G mᵢ mⱼ / r.
 
-use super::Paired;
+use super::{central, Paired};
 
 pub struct Fast;
 
 impl Paired for Fast {
     fn eval(p: &[f64], d: [f64; 3], [mi, mj, _, _]: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        if r2 == 0.0 {
-            return Err("at the same point, where gravity is infinite");
-        }
-        let r = r2.sqrt();
         let gmm = p[0] * mi * mj;
-        let s = gmm / (r2 * r);
-        Ok((d.map(|c| c * s), -gmm / r))
+        central(d, |r| (-gmm / r, gmm / (r * r)))
     }
 }
 

@@ -1,6 +1,6 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
-use super::{Bonded, Field, Force, Frame, Paired, Singularity};
+use super::{sub, Bonded, Field, Force, Frame, Paired, Singularity};
 use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::Kind;
 use std::marker::PhantomData;
@@ -22,10 +22,6 @@ impl Rows {
     fn row(&self, k: usize) -> &[f64] {
         &self.params[k * self.w..(k + 1) * self.w]
     }
-}
-
-fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 pub struct Bonds<T, const N: usize> {

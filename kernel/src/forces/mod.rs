@@ -6,9 +6,20 @@
 
 mod groups;
 
+mod coulomb;
+mod dihedral;
+mod drag;
+mod electric_field;
+mod fene_bond;
 mod gravity;
+mod gravity_well;
+mod harmonic_angle;
 mod harmonic_bond;
+mod harmonic_trap;
+mod morse_bond;
+mod nuclear_yukawa;
 mod uniform_acceleration;
+mod yukawa;
 
 #[cfg(test)]
 pub(crate) mod dual;
@@ -76,7 +87,42 @@ pub trait Field {
 pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
     match kind {
         Kind::HarmonicBond => Bonds::<harmonic_bond::Fast, 2>::boxed(kind, t, m),
-        Kind::UniformAcceleration => Fields::<uniform_acceleration::Fast>::boxed(kind, t),
+        Kind::MorseBond => Bonds::<morse_bond::Fast, 2>::boxed(kind, t, m),
+        Kind::FeneBond => Bonds::<fene_bond::Fast, 2>::boxed(kind, t, m),
+        Kind::HarmonicAngle => Bonds::<harmonic_angle::Fast, 3>::boxed(kind, t, m),
+        Kind::Dihedral => Bonds::<dihedral::Fast, 4>::boxed(kind, t, m),
         Kind::Gravity => Pairs::<gravity::Fast>::boxed(kind, t, m),
+        Kind::Coulomb => Pairs::<coulomb::Fast>::boxed(kind, t, m),
+        Kind::Yukawa => Pairs::<yukawa::Fast>::boxed(kind, t, m),
+        Kind::NuclearYukawa => Pairs::<nuclear_yukawa::Fast>::boxed(kind, t, m),
+        Kind::UniformAcceleration => Fields::<uniform_acceleration::Fast>::boxed(kind, t),
+        Kind::GravityWell => Fields::<gravity_well::Fast>::boxed(kind, t),
+        Kind::HarmonicTrap => Fields::<harmonic_trap::Fast>::boxed(kind, t),
+        Kind::ElectricField => Fields::<electric_field::Fast>::boxed(kind, t),
+        Kind::Drag => Fields::<drag::Fast>::boxed(kind, t),
     }
+}
+
+/// A central pair potential V(r) on the displacement d = xⱼ − xᵢ: `vr(r)` gives (V, dV/dr);
+/// the force on i is dV/dr · d/r.
+pub(crate) fn central(d: [f64; 3], vr: impl Fn(f64) -> (f64, f64)) -> Result<([f64; 3], f64), &'static str> {
+    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if r == 0.0 {
+        return Err("at the same point, where the pair force is infinite");
+    }
+    let (v, dv) = vr(r);
+    let s = dv / r;
+    Ok((d.map(|c| c * s), v))
+}
+
+pub(crate) fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(crate) fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(crate) fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }

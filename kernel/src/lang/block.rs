@@ -106,7 +106,8 @@ impl Reader {
                     format!("{owner}.{} expects {}, found {}", f.name, typed(dim), typed(u.dim)),
                 ));
             }
-            if self.system == UnitSystem::Reduced {
+            // rad and deg carry no dimension, so they mean the same in every unit system
+            if self.system == UnitSystem::Reduced && u.dim != Dim::NONE {
                 return Err(Diagnostic::new(
                     u.span,
                     "a physical unit in a scene with reduced units; declare `units si` or write a bare number",

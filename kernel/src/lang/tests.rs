@@ -36,8 +36,14 @@ fn syntax_error_says_what_was_expected() {
 
 #[test]
 fn unknown_keyword() {
-    assert_eq!(error("solver {", "solvr {"), at(5, 3, "unknown term `solvr`; known: gravity"));
-    assert_eq!(error("bond harmonic", "bond spring"), at(4, 8, "unknown bond `spring`; known: harmonic"));
+    assert_eq!(
+        error("solver {", "solvr {"),
+        at(5, 3, "unknown term `solvr`; known: gravity, well, trap, electric, drag")
+    );
+    assert_eq!(
+        error("bond harmonic", "bond spring"),
+        at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral")
+    );
     assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance"));
 }
 
@@ -203,4 +209,55 @@ fn comments_and_empty_bodies() {
     let s = compile(&GOOD.replace("scene s {", "scene s { // a comment\n  // another")).unwrap();
     assert_eq!(s.name, "s");
     assert_eq!(error("  entity { position: [0, 0, 0], mass: 1 }\n  entity { position: [1, 0, 0], mass: 1 }\n  bond harmonic [0, 1] { k: 2.0, r0: 1.0 }\n", ""), at(1, 1, "scene s has no entities"));
+}
+
+/// For every parameter of every term, a unit of the wrong dimension is rejected with the
+/// parameter's name and both dimensions, before any numerics.
+#[test]
+fn every_parameter_of_every_term_rejects_a_wrong_unit() {
+    use lagra_checker::terms::{Kind, Shape};
+    use lagra_checker::units::Dim;
+    for &kind in Kind::ALL {
+        let spec = kind.spec();
+        for target in spec.params {
+            let (wrong, found) = if target.dim == Dim::CHARGE { ("m", "L (length)") } else { ("C", "Q (charge)") };
+            let fields: Vec<String> = spec
+                .params
+                .iter()
+                .map(|p| {
+                    let value = if p.len == 3 { "[1, 2, 3]" } else { "1" };
+                    let unit = if p.name == target.name { wrong } else { "" };
+                    format!("{}: {value} {unit}", p.name)
+                })
+                .collect();
+            let body = fields.join(", ");
+            let term = match spec.shape {
+                Shape::Bond(n) => format!(
+                    "bond {} [{}] {{ {body} }}",
+                    spec.keyword,
+                    (0..n).map(|i| i.to_string()).collect::<Vec<_>>().join(", ")
+                ),
+                Shape::Pairwise => format!("interaction {} {{ {body} }}", spec.keyword),
+                Shape::External => format!("{} {{ {body} }}", spec.keyword),
+            };
+            let src = format!(
+                "scene s {{\n  units si\n  {}\n  {term}\n  solver {{ dt: 1 s }}\n}}",
+                "entity { position: [0, 0, 0] m, mass: 1 kg }\n".repeat(4)
+            );
+            let d = compile(&src).expect_err(&src);
+            let expected =
+                format!("{}.{} expects {}, found {found}", spec.name, target.name, super::block::typed(target.dim));
+            assert_eq!(d.message, expected, "{src}");
+        }
+    }
+}
+
+#[test]
+fn angles_take_degrees_in_any_unit_system() {
+    let src = GOOD.replace(
+        "bond harmonic [0, 1] { k: 2.0, r0: 1.0 }",
+        "entity { position: [0, 1, 0], mass: 1 }\n  bond angle [0, 1, 2] { k: 2.0, theta0: 90 deg }",
+    );
+    let s = compile(&src).unwrap();
+    assert_eq!(s.model.terms[0].params[1], std::f64::consts::FRAC_PI_2);
 }

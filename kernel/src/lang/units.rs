@@ -48,6 +48,8 @@ const WORDS: &[(&str, Dim, f64, i32)] = &[
     ("N", Dim([1, 1, -2, 0]), 1.0, 0),
     ("J", Dim::ENERGY, 1.0, 0),
     ("eV", Dim::ENERGY, 1.602_176_634, -19),
+    ("rad", Dim::NONE, 1.0, 0),
+    ("deg", Dim::NONE, std::f64::consts::PI / 180.0, 0),
 ];
 
 pub fn known_words() -> String {

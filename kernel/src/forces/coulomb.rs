@@ -1,0 +1,31 @@
+//! Coulomb: V = k qᵢ qⱼ / r.
+
+use super::{central, Paired};
+
+pub struct Fast;
+
+impl Paired for Fast {
+    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+        let a = p[0] * qi * qj;
+        central(d, |r| (a / r, -a / (r * r)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::forces::dual::assert_matches_definition;
+    use lagra_checker::terms::Kind;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn force_is_minus_gradient(k in 1e-3f64..10.0, seed in any::<u64>()) {
+            assert_matches_definition(Kind::Coulomb, &[k], seed, 1.0);
+        }
+
+        #[test]
+        fn near_contact_is_finite(k in 1e-3f64..10.0, tiny in 1e-100f64..1e-3, seed in any::<u64>()) {
+            assert_matches_definition(Kind::Coulomb, &[k], seed, tiny);
+        }
+    }
+}

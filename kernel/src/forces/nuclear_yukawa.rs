@@ -1,0 +1,26 @@
+//! Toy nuclear force: V = −g e^{−r/λ} / r, whatever the charges.
+
+use super::yukawa::screened;
+use super::Paired;
+
+pub struct Fast;
+
+impl Paired for Fast {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+        screened(-p[0], p[1], d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::forces::dual::assert_matches_definition;
+    use lagra_checker::terms::Kind;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn force_is_minus_gradient(g in 1e-3f64..10.0, range in 0.1f64..10.0, seed in any::<u64>()) {
+            assert_matches_definition(Kind::NuclearYukawa, &[g, range], seed, 1.0);
+        }
+    }
+}
