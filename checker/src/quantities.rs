@@ -38,8 +38,8 @@ impl<R: Real> Lifted<R> {
         match &self.cell {
             Some(c) if k != [0.0; 3] => {
                 let mut s = self.sites[j].clone();
-                for a in 0..3 {
-                    s.x[a] = s.x[a].clone() - self.zero.lift(k[a]) * self.zero.lift(c.size[a]);
+                for ((x, k), l) in s.x.iter_mut().zip(k).zip(c.size) {
+                    *x = x.clone() - self.zero.lift(k) * self.zero.lift(l);
                 }
                 Cow::Owned(s)
             }

@@ -38,7 +38,7 @@ mod tests {
 
     proptest! {
         #[test]
-        fn force_is_minus_gradient(k in 0.1f64..10.0, n in 1u8..=6, phase in 0.0f64..6.28, seed in any::<u64>()) {
+        fn force_is_minus_gradient(k in 0.1f64..10.0, n in 1u8..=6, phase in 0.0f64..std::f64::consts::TAU, seed in any::<u64>()) {
             assert_matches_definition(Kind::Dihedral, &[k, f64::from(n), phase], seed, 1.0);
         }
     }

@@ -37,7 +37,7 @@ mod tests {
 
     proptest! {
         #[test]
-        fn force_is_minus_gradient(k in 0.1f64..100.0, theta0 in 0.0f64..3.14159, seed in any::<u64>()) {
+        fn force_is_minus_gradient(k in 0.1f64..100.0, theta0 in 0.0f64..std::f64::consts::PI, seed in any::<u64>()) {
             assert_matches_definition(Kind::HarmonicAngle, &[k, theta0], seed, 1.0);
         }
     }
