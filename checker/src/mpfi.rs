@@ -197,6 +197,14 @@ impl Real for Mpfi {
         self.via_binary64(Interval::sin)
     }
 
+    fn atan2(self, x: Self) -> Self {
+        let (lo, hi) = x.bounds();
+        match Interval::try_from((lo, hi)) {
+            Ok(xi) => self.via_binary64(|y| y.atan2(xi)),
+            Err(_) => Mpfi::empty(self.prec()),
+        }
+    }
+
     fn lt(&self, bound: &Self) -> Option<bool> {
         if self.is_empty() || bound.is_empty() {
             None
@@ -280,7 +288,8 @@ mod tests {
             let c = Mpfi::point(64, (a / 1e6).clamp(-1.0, 1.0));
             prop_assert!(contains(&c.clone().acos(), &Float::with_val(2048, Float::with_val(2048, (a / 1e6).clamp(-1.0, 1.0)).acos_ref())));
             prop_assert!(contains(&x.clone().cos(), &Float::with_val(2048, fa.cos_ref())));
-            prop_assert!(contains(&x.sin(), &Float::with_val(2048, fa.sin_ref())));
+            prop_assert!(contains(&x.clone().sin(), &Float::with_val(2048, fa.sin_ref())));
+            prop_assert!(contains(&x.atan2(y), &Float::with_val(2048, fa.atan2_ref(&fb))));
         }
     }
 

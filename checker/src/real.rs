@@ -24,6 +24,8 @@ pub trait Real:
     fn acos(self) -> Self;
     fn cos(self) -> Self;
     fn sin(self) -> Self;
+    /// The angle of the point (x, self) in (−π, π].
+    fn atan2(self, x: Self) -> Self;
     /// Whether `self < bound`: always decided for a point, `None` when an enclosure straddles.
     fn lt(&self, bound: &Self) -> Option<bool>;
     /// The smallest value of the kind holding both; only reached when `lt` was undecided.
@@ -65,6 +67,9 @@ impl Real for f64 {
     fn sin(self) -> Self {
         f64::sin(self)
     }
+    fn atan2(self, x: Self) -> Self {
+        f64::atan2(self, x)
+    }
     fn lt(&self, bound: &Self) -> Option<bool> {
         (!self.is_nan() && !bound.is_nan()).then(|| self < bound)
     }
@@ -97,6 +102,9 @@ impl Real for Interval {
     }
     fn sin(self) -> Self {
         Interval::sin(self)
+    }
+    fn atan2(self, x: Self) -> Self {
+        Interval::atan2(self, x)
     }
     fn lt(&self, bound: &Self) -> Option<bool> {
         if self.is_empty() || bound.is_empty() {
@@ -143,6 +151,9 @@ impl Real for Float {
     }
     fn sin(self) -> Self {
         Float::sin(self)
+    }
+    fn atan2(self, x: Self) -> Self {
+        Float::atan2(self, &x)
     }
     fn lt(&self, bound: &Self) -> Option<bool> {
         (!self.is_nan() && !bound.is_nan()).then(|| self < bound)

@@ -182,6 +182,10 @@ impl Real for Dimension {
     fn sin(self) -> Self {
         self.pure("sin")
     }
+    /// An angle from two lengths of one dimension.
+    fn atan2(self, x: Self) -> Self {
+        Dimension(self.same(x, "atan2").0.map(|_| Dim::NONE))
+    }
     /// A dimension has no value to compare; both branches of a cutoff are checked.
     fn lt(&self, _: &Self) -> Option<bool> {
         None

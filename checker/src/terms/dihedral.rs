@@ -3,7 +3,7 @@
 //! bᵢ = xᵢ − xᵢ₋₁, n₁ = b₁×b₂, n₂ = b₂×b₃. A series is several dihedrals on the same bodies.
 
 use super::{Definition, Param, Shape, Site, Spec};
-use crate::real::{cross3, dot3, norm2, select, sub3, Real};
+use crate::real::{cross3, dot3, norm2, sub3, Real};
 use crate::units::Dim;
 
 pub struct Dihedral;
@@ -19,10 +19,7 @@ impl Definition for Dihedral {
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R {
         let (b1, b2, b3) = (sub3(&s[1].x, &s[0].x), sub3(&s[2].x, &s[1].x), sub3(&s[3].x, &s[2].x));
         let (n1, n2) = (cross3(&b1, &b2), cross3(&b2, &b3));
-        let x = dot3(&n1, &n2);
-        let y = norm2(&b2).sqrt() * dot3(&b1, &n2);
-        let angle = (x.clone() / (x.powi(2) + y.clone().powi(2)).sqrt()).acos();
-        let phi = select(y.lt(&y.lift(0.0)), -angle.clone(), angle);
+        let phi = (norm2(&b2).sqrt() * dot3(&b1, &n2)).atan2(dot3(&n1, &n2));
         p[0].clone() * (p[0].lift(1.0) + (p[1].clone() * phi - p[2].clone()).cos())
     }
 }

@@ -87,11 +87,17 @@ pub trait Definition {
     fn rayleigh<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
         None
     }
+    /// The distance beyond which the term vanishes: its `cutoff` parameter if it has one, else
+    /// unbounded (`None`).
+    fn reach(p: &[f64]) -> Option<f64> {
+        let at = Self::SPEC.params.iter().position(|q| q.name == "cutoff")?;
+        Some(p[Self::SPEC.params[..at].iter().map(|q| q.len).sum::<usize>()])
+    }
 }
 
 macro_rules! vocabulary {
     ($($kind:ident => $module:ident),* $(,)?) => {
-        $(mod $module; pub use $module::$kind;)*
+        $(pub mod $module; pub use $module::$kind;)*
 
         /// Every term kind there is.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -108,6 +114,9 @@ macro_rules! vocabulary {
             pub fn rayleigh<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
                 match self { $(Kind::$kind => $kind::rayleigh(p, s)),* }
             }
+            pub fn reach(self, p: &[f64]) -> Option<f64> {
+                match self { $(Kind::$kind => $kind::reach(p)),* }
+            }
         }
     };
 }
@@ -119,7 +128,12 @@ vocabulary! {
     HarmonicAngle => harmonic_angle,
     Dihedral => dihedral,
     Gravity => gravity,
+    LennardJones => lennard_jones,
+    LennardJonesShifted => lennard_jones_shifted,
+    LennardJonesForceShifted => lennard_jones_force_shifted,
+    Wca => wca,
     Coulomb => coulomb,
+    CoulombReactionField => coulomb_reaction_field,
     Yukawa => yukawa,
     NuclearYukawa => nuclear_yukawa,
     UniformAcceleration => uniform_acceleration,

@@ -71,6 +71,10 @@ impl Real for Dual {
     fn sin(self) -> Self {
         Dual { v: self.v.sin(), d: self.v.cos() * self.d }
     }
+    fn atan2(self, x: Self) -> Self {
+        let r2 = x.v * x.v + self.v * self.v;
+        Dual { v: self.v.atan2(x.v), d: (x.v * self.d - self.v * x.d) / r2 }
+    }
     fn lt(&self, bound: &Self) -> Option<bool> {
         Some(self.v < bound.v)
     }

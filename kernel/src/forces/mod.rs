@@ -7,6 +7,7 @@
 mod groups;
 
 mod coulomb;
+mod coulomb_reaction_field;
 mod dihedral;
 mod drag;
 mod electric_field;
@@ -16,9 +17,11 @@ mod gravity_well;
 mod harmonic_angle;
 mod harmonic_bond;
 mod harmonic_trap;
+mod lennard_jones;
 mod morse_bond;
 mod nuclear_yukawa;
 mod uniform_acceleration;
+mod wca;
 mod yukawa;
 
 #[cfg(test)]
@@ -92,7 +95,12 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::HarmonicAngle => Bonds::<harmonic_angle::Fast, 3>::boxed(kind, t, m),
         Kind::Dihedral => Bonds::<dihedral::Fast, 4>::boxed(kind, t, m),
         Kind::Gravity => Pairs::<gravity::Fast>::boxed(kind, t, m),
+        Kind::LennardJones => Pairs::<lennard_jones::Plain>::boxed(kind, t, m),
+        Kind::LennardJonesShifted => Pairs::<lennard_jones::Shifted>::boxed(kind, t, m),
+        Kind::LennardJonesForceShifted => Pairs::<lennard_jones::ForceShifted>::boxed(kind, t, m),
+        Kind::Wca => Pairs::<wca::Fast>::boxed(kind, t, m),
         Kind::Coulomb => Pairs::<coulomb::Fast>::boxed(kind, t, m),
+        Kind::CoulombReactionField => Pairs::<coulomb_reaction_field::Fast>::boxed(kind, t, m),
         Kind::Yukawa => Pairs::<yukawa::Fast>::boxed(kind, t, m),
         Kind::NuclearYukawa => Pairs::<nuclear_yukawa::Fast>::boxed(kind, t, m),
         Kind::UniformAcceleration => Fields::<uniform_acceleration::Fast>::boxed(kind, t),

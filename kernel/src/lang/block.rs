@@ -169,6 +169,30 @@ impl Reader {
     }
 }
 
+/// `[true, false, true]`.
+pub fn flags<const N: usize>(f: &Field, owner: &str) -> Result<[bool; N], Diagnostic> {
+    let bad = |at: Span| {
+        Diagnostic::new(at, format!("{owner}.{} expects {N} of true or false, like [true, true, false]", f.name))
+    };
+    let v = f.value.clone().into_inner().next().expect("a value has one child");
+    if v.as_rule() != Rule::flags {
+        return Err(bad(v.as_span().into()));
+    }
+    let words: Vec<Pair> = v.clone().into_inner().collect();
+    if words.len() != N {
+        return Err(bad(v.as_span().into()));
+    }
+    let mut out = [false; N];
+    for (o, w) in out.iter_mut().zip(&words) {
+        *o = match w.as_str() {
+            "true" => true,
+            "false" => false,
+            _ => return Err(bad(w.as_span().into())),
+        };
+    }
+    Ok(out)
+}
+
 /// A name or a quoted string.
 pub fn word<'a>(f: &Field<'a>, owner: &str) -> Result<(&'a str, Span), Diagnostic> {
     let v = f.value.clone().into_inner().next().expect("a value has one child");

@@ -1,14 +1,14 @@
 //! From the parse tree to a [`Scene`]: templates resolved, terms looked up in the checker's
 //! vocabulary, every number checked for dimension and converted, every index checked.
 
-use super::block::{typed, value_span, word, Block, Field, Reader};
+use super::block::{flags, typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
 use super::{Pair, Rule};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{Scene, Solver};
 use crate::solvers::Integrator;
 use lagra_checker::claims::{Between, Claim, ClaimKind};
-use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
+use lagra_checker::model::{Body, Cell, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
 use lagra_checker::units::Dim;
 use std::collections::HashMap;
@@ -36,6 +36,9 @@ struct Compiler<'a> {
     claims: Vec<Claim>,
     predictions: Vec<(PredictionKind, Option<f64>, Span)>,
     solver: Option<Solver>,
+    cell: Option<(Cell, Span)>,
+    /// Where each term was written, for errors found once the whole scene is known.
+    term_at: Vec<Span>,
     description: Option<String>,
     domain: Option<String>,
 }
@@ -70,6 +73,8 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         claims: vec![],
         predictions: vec![],
         solver: None,
+        cell: None,
+        term_at: vec![],
         description: None,
         domain: None,
     };
@@ -136,6 +141,7 @@ impl<'a> Compiler<'a> {
                 }
                 let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
                 self.terms.push(TermInstance { kind, sites: indices.iter().map(|i| i.0).collect(), params });
+                self.term_at.push(kw.as_span().into());
                 self.indices.push(indices);
                 Ok(())
             }
@@ -149,6 +155,7 @@ impl<'a> Compiler<'a> {
                 let kind = lookup(&kw, |s| s == shape, what)?;
                 let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
                 self.terms.push(TermInstance { kind, sites: vec![], params });
+                self.term_at.push(kw.as_span().into());
                 self.indices.push(vec![]);
                 Ok(())
             }
@@ -170,6 +177,22 @@ impl<'a> Compiler<'a> {
                 let tol = block.take("tol").map(|f| self.rd.positive(&f, name.as_str(), Dim::NONE)).transpose()?;
                 block.check_names(name.as_str(), &[])?;
                 self.predictions.push((kind, tol, name.as_span().into()));
+                Ok(())
+            }
+            Rule::cell => {
+                if self.cell.is_some() {
+                    return err(span, "second box");
+                }
+                let mut b = Block::read(next().and(next()), span)?;
+                let size =
+                    b.take("size").ok_or_else(|| Diagnostic::new(span, "box needs a size: `size: [x, y, z]`"))?;
+                let lengths = self.rd.numbers(&size, "box", Dim::LENGTH, 3)?;
+                if let Some(l) = lengths.iter().find(|l| **l <= 0.0) {
+                    return err(value_span(&size), format!("box.size must be positive, got {l}"));
+                }
+                let periodic = b.take("periodic").map(|f| flags::<3>(&f, "box")).transpose()?.unwrap_or([true; 3]);
+                b.check_names("box", &[])?;
+                self.cell = Some((Cell { size: [lengths[0], lengths[1], lengths[2]], periodic }, span));
                 Ok(())
             }
             Rule::solver => {
@@ -348,7 +371,11 @@ impl<'a> Compiler<'a> {
             }
         }
         let solver = self.solver.ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
-        let model = Model { units: self.rd.system, cell: None, bodies: self.bodies, terms: self.terms };
+        if let Some((c, _)) = &self.cell {
+            reach_within(c, &self.terms, &self.term_at)?;
+        }
+        let cell = self.cell.map(|c| c.0);
+        let model = Model { units: self.rd.system, cell, bodies: self.bodies, terms: self.terms };
         let predictions = self
             .predictions
             .into_iter()
@@ -370,6 +397,27 @@ impl<'a> Compiler<'a> {
             solver,
         })
     }
+}
+
+/// In a periodic box a pair term sees only the nearest image of each body: its reach must be
+/// finite and at most half the box, or the model would silently be another one.
+fn reach_within(c: &Cell, terms: &[TermInstance], at: &[Span]) -> Result<(), Diagnostic> {
+    let half = (0..3).filter(|&a| c.periodic[a]).map(|a| c.size[a] / 2.0).fold(f64::INFINITY, f64::min);
+    if half.is_infinite() {
+        return Ok(());
+    }
+    for (t, s) in terms.iter().zip(at).filter(|(t, _)| t.kind.spec().shape == Shape::Pairwise) {
+        match t.kind.reach(&t.params) {
+            None => {
+                return err(*s, format!("{} has unbounded reach: in a periodic box it would see only the nearest image; use a term with a cutoff", t.kind.name()))
+            }
+            Some(r) if r > half => {
+                return err(*s, format!("{} reaches {r}, more than half the periodic box ({half})", t.kind.name()))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// `axes: "xz"`: the momentum components a claim is about.

@@ -29,6 +29,8 @@ fn describe(r: &Rule) -> &'static str {
         Rule::expect => "`@expect`",
         Rule::predict => "`@predict`",
         Rule::solver | Rule::kw_solver => "`solver`",
+        Rule::cell | Rule::kw_box => "`box`",
+        Rule::flags => "`[true, false, ...]`",
         Rule::item => "a scene item",
         Rule::file | Rule::WHITESPACE | Rule::COMMENT | Rule::ident_char => "input",
     }

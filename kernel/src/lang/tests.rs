@@ -31,7 +31,7 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
-    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver` or a name, found end of file"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver`, `box` or a name, found end of file"));
 }
 
 #[test]
@@ -260,4 +260,24 @@ fn angles_take_degrees_in_any_unit_system() {
     );
     let s = compile(&src).unwrap();
     assert_eq!(s.model.terms[0].params[1], std::f64::consts::FRAC_PI_2);
+}
+
+#[test]
+fn a_periodic_box_and_its_reach_checks() {
+    let boxed =
+        |term: &str, cell: &str| GOOD.replace("bond harmonic [0, 1] { k: 2.0, r0: 1.0 }", &format!("{cell}\n  {term}"));
+    let s = compile(&boxed("interaction lj { epsilon: 1, sigma: 1, cutoff: 2.5 }", "box { size: [6, 6, 6] }")).unwrap();
+    assert_eq!(s.model.cell.unwrap().periodic, [true; 3]);
+    let e =
+        compile(&boxed("interaction lj { epsilon: 1, sigma: 1, cutoff: 2.5 }", "box { size: [6, 4, 6] }")).unwrap_err();
+    assert_eq!(e.message, "LennardJones reaches 2.5, more than half the periodic box (2)");
+    let e = compile(&boxed("interaction coulomb { k: 1 }", "box { size: [6, 6, 6] }")).unwrap_err();
+    assert!(e.message.starts_with("Coulomb has unbounded reach"), "{}", e.message);
+    // a box closed along every axis that matters imposes nothing
+    compile(&boxed("interaction coulomb { k: 1 }", "box { size: [6, 6, 6], periodic: [false, false, false] }"))
+        .unwrap();
+    let e = compile(&boxed("", "box { size: [6, 6, 6], periodic: [true, maybe, true] }")).unwrap_err();
+    assert_eq!(e.message, "box.periodic expects 3 of true or false, like [true, true, false]");
+    let e = compile(&boxed("", "box { size: [6, 0, 6] }")).unwrap_err();
+    assert_eq!(e.message, "box.size must be positive, got 0");
 }

@@ -1,0 +1,22 @@
+//! Lennard-Jones with energy and force shifted to zero at the cutoff:
+//! V(r) − V(r_c) − (r − r_c) V′(r_c) for r < r_c, V′(r) = 24ε[(σ/r)⁶ − 2(σ/r)¹²]/r.
+
+use super::lennard_jones::{cut, lj, PARAMS};
+use super::{Definition, Shape, Site, Spec};
+use crate::real::Real;
+
+pub struct LennardJonesForceShifted;
+
+impl Definition for LennardJonesForceShifted {
+    const SPEC: Spec =
+        Spec { name: "LennardJonesForceShifted", keyword: "lj_force_shifted", shape: Shape::Pairwise, params: PARAMS };
+
+    fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R {
+        let (eps, sigma, rc) = (&p[0], &p[1], p[2].clone());
+        let s6 = (sigma.clone() / rc.clone()).powi(6);
+        let slope = eps.lift(24.0) * eps.clone() * (s6.clone() - s6.lift(2.0) * s6.powi(2)) / rc.clone();
+        cut(p, s, rc.clone(), |r2| {
+            lj(eps, sigma, r2.clone()) - lj(eps, sigma, rc.clone().powi(2)) - (r2.sqrt() - rc) * slope
+        })
+    }
+}

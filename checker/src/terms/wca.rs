@@ -1,0 +1,31 @@
+//! Weeks–Chandler–Andersen repulsion: Lennard-Jones cut at its minimum r_c = 2^{1/6}σ and
+//! lifted by ε, V = 4ε[(σ/r)¹² − (σ/r)⁶] + ε for r < r_c: purely repulsive, continuous with
+//! its force (the bead–bead repulsion of Kremer–Grest polymers).
+
+use super::lennard_jones::{cut, lj};
+use super::{Definition, Param, Shape, Site, Spec};
+use crate::real::Real;
+use crate::units::Dim;
+
+pub struct Wca;
+
+/// 2^{1/6}, the position of the Lennard-Jones minimum in units of σ.
+pub const MINIMUM: f64 = 1.122_462_048_309_373;
+
+impl Definition for Wca {
+    const SPEC: Spec = Spec {
+        name: "Wca",
+        keyword: "wca",
+        shape: Shape::Pairwise,
+        params: &[Param::scalar("epsilon", Dim::ENERGY), Param::scalar("sigma", Dim::LENGTH)],
+    };
+
+    fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R {
+        let rc = p[1].lift(MINIMUM) * p[1].clone();
+        cut(p, s, rc, |r2| lj(&p[0], &p[1], r2) + p[0].clone())
+    }
+
+    fn reach(p: &[f64]) -> Option<f64> {
+        Some(MINIMUM * p[1])
+    }
+}

@@ -1,0 +1,31 @@
+//! WCA: Lennard-Jones + ε inside 2^{1/6}σ, nothing beyond.
+
+use super::lennard_jones::{cut, lj};
+use super::Paired;
+use lagra_checker::terms::wca::MINIMUM;
+
+pub struct Fast;
+
+impl Paired for Fast {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+        cut(d, MINIMUM * p[1], |r2| {
+            let (v, s) = lj(p[0], p[1], r2);
+            (v + p[0], s)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::forces::dual::assert_matches_definition;
+    use lagra_checker::terms::Kind;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// σ from 1 to 8 puts the random pair on both sides of 2^{1/6}σ.
+        #[test]
+        fn force_is_minus_gradient(eps in 0.1f64..5.0, sigma in 1.0f64..8.0, seed in any::<u64>()) {
+            assert_matches_definition(Kind::Wca, &[eps, sigma], seed, 1.0);
+        }
+    }
+}
