@@ -20,6 +20,7 @@ pub mod quantities;
 pub mod real;
 pub mod recheck;
 pub mod render;
+mod soundness;
 pub mod states;
 pub mod terms;
 pub mod units;

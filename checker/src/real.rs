@@ -7,6 +7,7 @@
 //! their own rounding and *sound* (an enclosure) for `Interval`.
 
 use inari::Interval;
+#[cfg(test)]
 use rug::Float;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -127,6 +128,9 @@ pub fn point(c: f64) -> Interval {
     Interval::try_from((c, c)).unwrap_or(Interval::ENTIRE)
 }
 
+/// The 1024-bit reference of the soundness tests (round-to-nearest: a value, not an enclosure;
+/// the checker's own high precision is `mpfi::Mpfi`, which rounds outward).
+#[cfg(test)]
 impl Real for Float {
     fn lift(&self, c: f64) -> Self {
         Float::with_val(self.prec(), c)

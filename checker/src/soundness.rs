@@ -1,16 +1,17 @@
 //! Soundness of the trusted core, as properties over thousands of random cases:
 //! every enclosure holds the 1024-bit MPFR value, the decision never PASSes a drift that the
 //! 1024-bit value shows to exceed the tolerance, and the certificate reader never panics.
+#![cfg(test)]
 
+use crate::certificate::{Certificate, Run, FORMAT};
+use crate::claims::{Claim, ClaimKind};
+use crate::decision::Verdict;
+use crate::model::{Body, Model, Snapshot, TermInstance, UnitSystem};
+use crate::monitor::Monitor;
+use crate::quantities::Lifted;
+use crate::real::Real;
+use crate::terms::{Kind, Site};
 use inari::Interval;
-use lagra_checker::certificate::{Certificate, Run, FORMAT};
-use lagra_checker::claims::{Claim, ClaimKind};
-use lagra_checker::decision::Verdict;
-use lagra_checker::model::{Body, Model, Snapshot, TermInstance, UnitSystem};
-use lagra_checker::monitor::Monitor;
-use lagra_checker::quantities::Lifted;
-use lagra_checker::real::Real;
-use lagra_checker::terms::{Kind, Site};
 use proptest::prelude::*;
 use rug::Float;
 
