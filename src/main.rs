@@ -1,6 +1,7 @@
 //! `lagra`: run a scene and certify its claims.
 
 mod check;
+mod list;
 mod report;
 mod run;
 
@@ -32,11 +33,14 @@ state); 2 bad input (the scene, a file, an argument).")]
     #[command(after_help = "Exit status: 0 the re-check agrees and every claim PASSed; 1 it disagrees, a claim \
 did not PASS, or the certificate is not of the scene given; 2 a file is missing, malformed or does not fit.")]
     Check(check::Args),
+    /// List the scenes of a folder with their domains, terms, claims and predictions.
+    List(list::Args),
 }
 
 fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Run(args) => run::main(args),
         Command::Check(args) => check::main(args),
+        Command::List(args) => list::main(args),
     }
 }

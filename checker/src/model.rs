@@ -25,7 +25,8 @@ pub struct Body {
 #[serde(deny_unknown_fields)]
 pub struct TermInstance {
     pub kind: Kind,
-    /// Body indices for a bond; empty for pairwise and external terms (they act on all bodies).
+    /// Body indices: a bond's bodies; empty for a pairwise term (every pair); for an external
+    /// term the bodies it acts on, empty for every body.
     pub sites: Vec<usize>,
     /// Parameters flattened in the order of the kind's `Spec::params`.
     pub params: Vec<f64>,
@@ -124,7 +125,9 @@ impl Model {
             }
             let sites_ok = match spec.shape {
                 Shape::Bond(arity) => t.sites.len() == arity,
-                Shape::Pairwise | Shape::External => t.sites.is_empty(),
+                Shape::Pairwise => t.sites.is_empty(),
+                // every body, or only those listed
+                Shape::External => true,
             };
             if !sites_ok {
                 return Err(format!("term {n} ({name}): wrong number of sites ({})", t.sites.len()));

@@ -56,7 +56,8 @@ impl<R: Real> Lifted<R> {
                     let seen: Vec<Cow<Site<R>>> = t.sites.iter().map(|&j| self.seen_from(t.sites[0], j)).collect();
                     f(n, &seen.iter().map(|s| s.as_ref()).collect::<Vec<_>>());
                 }
-                Shape::External => self.sites.iter().for_each(|s| f(n, &[s])),
+                Shape::External if t.sites.is_empty() => self.sites.iter().for_each(|s| f(n, &[s])),
+                Shape::External => t.sites.iter().for_each(|&i| f(n, &[&self.sites[i]])),
                 Shape::Pairwise => {
                     for i in 0..self.sites.len() {
                         for j in i + 1..self.sites.len() {

@@ -116,6 +116,8 @@ impl<T: Paired + Send + Sync> Force for Pairs<T> {
 pub struct Fields<T> {
     name: &'static str,
     rows: Rows,
+    /// Per instance, the bodies it acts on (empty: every body).
+    on: Vec<Vec<usize>>,
     velocity: bool,
     term: PhantomData<T>,
 }
@@ -124,24 +126,31 @@ impl<T: Field + Send + Sync + 'static> Fields<T> {
     pub fn boxed(kind: Kind, t: &[&TermInstance]) -> Box<dyn Force> {
         let rows = Rows::new(kind, t);
         let velocity = rows.iter().any(T::velocity_dependent);
-        Box::new(Fields::<T> { name: kind.name(), rows, velocity, term: PhantomData })
+        let on = t.iter().map(|t| t.sites.clone()).collect();
+        Box::new(Fields::<T> { name: kind.name(), rows, on, velocity, term: PhantomData })
     }
 }
 
 impl<T: Field + Send + Sync> Force for Fields<T> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let mut energy = 0.0;
-        for (i, fi) in f.iter_mut().enumerate() {
-            for p in self.rows.iter() {
+        for (p, on) in self.rows.iter().zip(&self.on) {
+            let mut one = |i: usize| -> Result<(), Singularity> {
                 let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i]).map_err(|what| Singularity {
                     term: self.name,
                     bodies: vec![i],
                     what,
                 })?;
                 for c in 0..3 {
-                    fi[c] += a[c];
+                    f[i][c] += a[c];
                 }
                 energy += e;
+                Ok(())
+            };
+            if on.is_empty() {
+                (0..s.x.len()).try_for_each(&mut one)?;
+            } else {
+                on.iter().try_for_each(|&i| one(i))?;
             }
         }
         Ok(energy)

@@ -132,12 +132,23 @@ impl Reader {
 
     /// `n` body indices, written `[i, j, ...]` (their range is checked once all bodies are known).
     pub fn indices(&self, f: &Field, owner: &str, n: usize) -> Result<Vec<(usize, Span)>, Diagnostic> {
-        let bad = || Diagnostic::new(value_span(f), format!("{owner}.{} expects {n} body indices `[i, j]`", f.name));
+        self.list_of(f, owner, Some(n))
+    }
+
+    /// Any number of body indices, at least one.
+    pub fn body_list(&self, f: &Field, owner: &str) -> Result<Vec<(usize, Span)>, Diagnostic> {
+        self.list_of(f, owner, None)
+    }
+
+    fn list_of(&self, f: &Field, owner: &str, n: Option<usize>) -> Result<Vec<(usize, Span)>, Diagnostic> {
+        let count = n.map_or("a list of".to_string(), |n| n.to_string());
+        let bad =
+            || Diagnostic::new(value_span(f), format!("{owner}.{} expects {count} body indices `[i, j]`", f.name));
         let q = f.value.clone().into_inner().next().expect("a value has one child");
         let mut parts = q.into_inner();
         let list = parts.next().filter(|v| v.as_rule() == Rule::vector).ok_or_else(bad)?;
         let nums: Vec<Pair> = list.into_inner().collect();
-        if nums.len() != n || parts.next().is_some() {
+        if n.is_some_and(|n| nums.len() != n) || parts.next().is_some() {
             return Err(bad());
         }
         nums.iter()

@@ -153,10 +153,22 @@ impl<'a> Compiler<'a> {
                     ("term", Shape::External)
                 };
                 let kind = lookup(&kw, |s| s == shape, what)?;
-                let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
-                self.terms.push(TermInstance { kind, sites: vec![], params });
+                let mut block = Block::read(next(), kw.as_span().into())?;
+                // an external term acts on every body, or only on those listed in `on`
+                let on = match block.take("on") {
+                    Some(f) if shape == Shape::External => self.rd.body_list(&f, kind.name())?,
+                    Some(f) => {
+                        return err(
+                            f.span,
+                            format!("{} acts on every pair; `on` belongs to external terms", kind.name()),
+                        )
+                    }
+                    None => vec![],
+                };
+                let params = self.params(kind, block, kw.as_span().into())?;
+                self.terms.push(TermInstance { kind, sites: on.iter().map(|i| i.0).collect(), params });
                 self.term_at.push(kw.as_span().into());
-                self.indices.push(vec![]);
+                self.indices.push(on);
                 Ok(())
             }
             Rule::expect => {

@@ -281,3 +281,18 @@ fn a_periodic_box_and_its_reach_checks() {
     let e = compile(&boxed("", "box { size: [6, 0, 6] }")).unwrap_err();
     assert_eq!(e.message, "box.size must be positive, got 0");
 }
+
+#[test]
+fn external_terms_act_on_listed_bodies() {
+    let with = |t: &str| GOOD.replace("bond harmonic [0, 1] { k: 2.0, r0: 1.0 }", t);
+    let s = compile(&with("trap { k: 5, on: [1] }")).unwrap();
+    assert_eq!(s.model.terms[0].sites, [1]);
+    assert_eq!(
+        compile(&with("trap { k: 5, on: [3] }")).unwrap_err().message,
+        "body index 3 is out of range: the scene has 2 entities (0..1)"
+    );
+    assert_eq!(
+        compile(&with("interaction gravity { G: 1, on: [0] }")).unwrap_err().message,
+        "Gravity acts on every pair; `on` belongs to external terms"
+    );
+}
