@@ -33,13 +33,14 @@ pub trait Real:
     fn hull(self, o: Self) -> Self;
 }
 
-/// `yes` if `cond`, `no` if not, and for an undecided enclosure the hull of both: the cutoff
-/// primitive, exact for points and sound for intervals.
-pub fn select<R: Real>(cond: Option<bool>, yes: R, no: R) -> R {
+/// `yes()` if `cond`, `no()` if not, and for an undecided enclosure the hull of both: the cutoff
+/// primitive, exact for points and sound for intervals. Lazy: a pair beyond its cutoff costs
+/// one comparison.
+pub fn select<R: Real>(cond: Option<bool>, yes: impl FnOnce() -> R, no: impl FnOnce() -> R) -> R {
     match cond {
-        Some(true) => yes,
-        Some(false) => no,
-        None => yes.hull(no),
+        Some(true) => yes(),
+        Some(false) => no(),
+        None => yes().hull(no()),
     }
 }
 

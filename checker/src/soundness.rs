@@ -169,3 +169,28 @@ proptest! {
         let _ = Certificate::read(&String::from_utf8_lossy(&b));
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+
+    /// A term with a finite reach is exactly zero beyond it (the broad phase of the quantities
+    /// skips such pairs): evaluated in binary64 intervals, the enclosure is the point 0.
+    #[test]
+    fn beyond_its_reach_a_term_is_exactly_zero(
+        params in prop::collection::vec(0.01f64..5.0, 8),
+        dir in prop::array::uniform3(-1.0f64..1.0),
+        extra in 1e-6f64..10.0,
+    ) {
+        for &kind in Kind::ALL {
+            let params = &params[..kind.spec().width()];
+            let Some(reach) = kind.reach(params) else { continue };
+            let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+            prop_assume!(norm > 0.1);
+            let r = reach * (1.0 + 1e-6) + extra;
+            let far = [dir[0] / norm * r, dir[1] / norm * r, dir[2] / norm * r];
+            let bodies: Vec<Body3> = vec![([0.0; 3], [0.0; 3], 1.0, 1.0), (far, [0.0; 3], 1.0, -1.0)];
+            let (v, _) = eval(kind, params, &bodies, &Interval::EMPTY);
+            prop_assert!(v.inf() == 0.0 && v.sup() == 0.0, "{kind:?} at {r} beyond reach {reach}: {v}");
+        }
+    }
+}

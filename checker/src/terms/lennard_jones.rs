@@ -20,8 +20,7 @@ pub(super) fn lj<R: Real>(eps: &R, sigma: &R, r2: R) -> R {
 pub(super) fn cut<R: Real>(p: &[R], s: &[&Site<R>], rc: R, inside: impl FnOnce(R) -> R) -> R {
     let r2 = norm2(&sub3(&s[1].x, &s[0].x));
     let rc2 = rc.powi(2);
-    let zero = p[0].clone() * p[0].lift(0.0);
-    select(r2.lt(&rc2), inside(r2), zero)
+    select(r2.lt(&rc2), || inside(r2), || p[0].clone() * p[0].lift(0.0))
 }
 
 impl Definition for LennardJones {
