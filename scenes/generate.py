@@ -109,7 +109,7 @@ def lj_liquid():
     lines += [f"  entity {{ type: atom, position: {vec(x)}, velocity: {vec(v)} }}" for x, v in zip(xs, vels)]
     lines += [
         "  interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }",
-        "  @expect energy_conservation { tol: 1e-3, every: 20 }",
+        "  @expect energy_conservation { tol: 2e-4, every: 20 }",
         "  @expect momentum_conservation { every: 20 }",
         "  @expect dimensional_consistency",
         "  @predict maxwell_boltzmann { tol: 0.01 }",

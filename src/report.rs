@@ -109,21 +109,14 @@ impl Summary {
             let _ = writeln!(s, "{}", c.line);
         }
         for p in &self.predictions {
-            let _ = match (p.measured, p.rel_diff) {
-                (Some(m), Some(d)) => writeln!(
-                    s,
-                    "{} {}  measured {m:.6} predicted {:.6} rel diff {}{}",
-                    p.name,
-                    if p.agrees { "agrees" } else { "DISAGREES" },
-                    p.predicted,
-                    up(d),
-                    p.tol.map(|t| format!(" (tol {})", sci(t))).unwrap_or_default()
-                ),
-                _ => writeln!(
-                    s,
-                    "{} NOT MEASURED  predicted {:.6}; the run saw too little of the motion",
-                    p.name, p.predicted
-                ),
+            let verdict = if p.agrees { "agrees" } else { "DISAGREES" };
+            let tol = p.tol.map(|t| format!(" (tol {})", sci(t))).unwrap_or_default();
+            let _ = match (p.measured, p.predicted, p.rel_diff, &p.detail) {
+                (Some(m), Some(want), Some(d), _) => {
+                    writeln!(s, "{} {verdict}  measured {m:.6} predicted {want:.6} rel diff {}{tol}", p.name, up(d))
+                }
+                (Some(_), None, _, Some(detail)) => writeln!(s, "{} {verdict}  {detail}{tol}", p.name),
+                _ => writeln!(s, "{} NOT MEASURED  the run saw too little of the motion", p.name),
             };
         }
         if let Some(h) = &self.halted {

@@ -15,23 +15,31 @@ pub enum PredictionKind {
     OscillatorPeriod,
     /// Two bodies under Newtonian gravity: T = 2π√(a³/G(m₀+m₁)), a from the vis-viva equation.
     KeplerPeriod,
+    /// Statistical: at the end of the run the velocity components, relative to the centre of
+    /// mass and scaled by √(m/T) at the measured kinetic temperature T, pass a Kolmogorov–Smirnov
+    /// test against the standard normal distribution (p ≥ tol, 0.01 if not given).
+    MaxwellBoltzmann,
 }
 
 #[derive(Clone, Debug)]
 pub struct Prediction {
     pub kind: PredictionKind,
-    /// The relative difference allowed between measured and predicted; reported only if absent.
+    /// The relative difference allowed between measured and predicted (for a statistical test,
+    /// the least p-value); reported only if absent.
     pub tol: Option<f64>,
-    pub predicted: f64,
+    /// The closed-form value; `None` for a statistical test.
+    pub predicted: Option<f64>,
 }
 
 impl PredictionKind {
-    pub const ALL: [PredictionKind; 2] = [PredictionKind::OscillatorPeriod, PredictionKind::KeplerPeriod];
+    pub const ALL: [PredictionKind; 3] =
+        [PredictionKind::OscillatorPeriod, PredictionKind::KeplerPeriod, PredictionKind::MaxwellBoltzmann];
 
     pub fn name(self) -> &'static str {
         match self {
             PredictionKind::OscillatorPeriod => "oscillator_period",
             PredictionKind::KeplerPeriod => "kepler_period",
+            PredictionKind::MaxwellBoltzmann => "maxwell_boltzmann",
         }
     }
 
@@ -39,8 +47,12 @@ impl PredictionKind {
         Self::ALL.into_iter().find(|k| k.name() == s)
     }
 
-    /// The predicted period, or why the closed form does not apply to this scene.
-    pub fn predict(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<f64, String> {
+    /// The predicted value (`None` for a statistical test), or why the prediction does not apply.
+    pub fn predict(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<Option<f64>, String> {
+        self.closed_form(model, x0, v0)
+    }
+
+    fn closed_form(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<Option<f64>, String> {
         let kinds: Vec<Kind> = model.terms.iter().map(|t| t.kind).collect();
         let rel = |i: usize, j: usize| {
             (Vector3::from(x0[j]) - Vector3::from(x0[i]), Vector3::from(v0[j]) - Vector3::from(v0[i]))
@@ -61,7 +73,7 @@ impl PredictionKind {
                 }
                 let w2 = k / mu - (gamma / (2.0 * mu)).powi(2);
                 if w2 > 0.0 {
-                    Ok(TAU / w2.sqrt())
+                    Ok(Some(TAU / w2.sqrt()))
                 } else {
                     Err("the bond is critically or over-damped: it has no period".into())
                 }
@@ -74,11 +86,15 @@ impl PredictionKind {
                 let (r, v) = rel(0, 1);
                 let inv_a = 2.0 / r.norm() - v.norm_squared() / mu;
                 if inv_a > 0.0 {
-                    Ok(TAU * (inv_a.powi(-3) / mu).sqrt())
+                    Ok(Some(TAU * (inv_a.powi(-3) / mu).sqrt()))
                 } else {
                     Err("the orbit is unbound: it has no period".into())
                 }
             }
+            PredictionKind::MaxwellBoltzmann if model.bodies.len() < 10 => {
+                Err("needs at least 10 bodies for a distribution to test".into())
+            }
+            PredictionKind::MaxwellBoltzmann => Ok(None),
         }
     }
 }
@@ -89,6 +105,8 @@ pub enum Meter {
     Crossings { i: usize, j: usize, r0: f64, last: Option<(f64, f64)>, first: Option<f64>, latest: f64, count: u64 },
     /// Completed revolutions of the relative position in the orbital plane.
     Revolutions { basis: Option<(Vector3<f64>, Vector3<f64>)>, angle: f64, last: (f64, f64), turns: u64, at: f64 },
+    /// The first and the last velocities, and the masses.
+    Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64> },
 }
 
 impl Meter {
@@ -109,11 +127,19 @@ impl Meter {
             PredictionKind::KeplerPeriod => {
                 Meter::Revolutions { basis: None, angle: 0.0, last: (0.0, 0.0), turns: 0, at: 0.0 }
             }
+            PredictionKind::MaxwellBoltzmann => {
+                Meter::Velocities { first: None, last: vec![], masses: model.bodies.iter().map(|b| b.mass).collect() }
+            }
         }
     }
 
     pub fn observe(&mut self, t: f64, x: &[[f64; 3]], v: &[[f64; 3]]) {
         match self {
+            Meter::Velocities { first, last, .. } => {
+                first.get_or_insert_with(|| v.to_vec());
+                last.clear();
+                last.extend_from_slice(v);
+            }
             Meter::Crossings { i, j, r0, last, first, latest, count } => {
                 let s = (Vector3::from(x[*j]) - Vector3::from(x[*i])).norm() - *r0;
                 if let Some((t0, s0)) = *last {
@@ -150,8 +176,24 @@ impl Meter {
         }
     }
 
-    /// The measured period, once enough of the trajectory has been seen.
-    pub fn measured(&self) -> Option<f64> {
+    /// The measured value (a period, or a statistical test's p-value) and, for a test, what it
+    /// saw; `None` if the run saw too little.
+    pub fn measured(&self) -> Option<(f64, Option<String>)> {
+        if let Meter::Velocities { first: Some(first), last, masses } = self {
+            let (d, p, t) = ks_maxwell_boltzmann(last, masses);
+            let (_, p0, _) = ks_maxwell_boltzmann(first, masses);
+            let n = 3 * last.len();
+            return Some((
+                p,
+                Some(format!(
+                    "KS D = {d:.4} over {n} velocity components at T = {t:.4}: p = {p:.3} (initially p = {p0:.1e})"
+                )),
+            ));
+        }
+        self.period().map(|t| (t, None))
+    }
+
+    fn period(&self) -> Option<f64> {
         match self {
             Meter::Crossings { first, latest, count, .. } if *count >= 2 => {
                 Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64)
@@ -159,5 +201,66 @@ impl Meter {
             Meter::Revolutions { turns, at, .. } if *turns >= 1 => Some(at / *turns as f64),
             _ => None,
         }
+    }
+}
+
+/// Kolmogorov–Smirnov test of velocities against Maxwell–Boltzmann: each component relative to
+/// the centre of mass, scaled by √(m/T) with T = Σ m|v − v_cm|² / (3N − 3), against the standard
+/// normal. Returns (D, p-value, T); p from the asymptotic Kolmogorov distribution with
+/// Stephens' small-sample correction.
+fn ks_maxwell_boltzmann(v: &[[f64; 3]], m: &[f64]) -> (f64, f64, f64) {
+    let total: f64 = m.iter().sum();
+    let cm: [f64; 3] = std::array::from_fn(|c| v.iter().zip(m).map(|(v, m)| m * v[c]).sum::<f64>() / total);
+    let rel = |v: &[f64; 3]| -> [f64; 3] { std::array::from_fn(|c| v[c] - cm[c]) };
+    let twice_kinetic: f64 = v.iter().zip(m).map(|(v, m)| m * rel(v).iter().map(|c| c * c).sum::<f64>()).sum();
+    let t = twice_kinetic / (3.0 * v.len() as f64 - 3.0);
+    let mut z: Vec<f64> = v.iter().zip(m).flat_map(|(v, m)| rel(v).map(|c| c * (m / t).sqrt())).collect();
+    z.sort_by(f64::total_cmp);
+    let n = z.len() as f64;
+    let d = z.iter().enumerate().fold(0.0f64, |d, (i, x)| {
+        let f = 0.5 * libm::erfc(-x / std::f64::consts::SQRT_2);
+        d.max((i + 1) as f64 / n - f).max(f - i as f64 / n)
+    });
+    let lambda = (n.sqrt() + 0.12 + 0.11 / n.sqrt()) * d;
+    let p = if lambda < 0.2 {
+        1.0
+    } else {
+        (1..=100).map(|k| (if k % 2 == 1 { 2.0 } else { -2.0 }) * (-2.0 * (k * k) as f64 * lambda * lambda).exp()).sum()
+    };
+    (d, p.clamp(0.0, 1.0), t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ks_maxwell_boltzmann;
+
+    /// Deterministic standard-normal samples (Box–Muller on a fixed sequence).
+    fn gaussian(n: usize) -> Vec<f64> {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut u = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n).map(|_| (-2.0 * u().max(1e-300).ln()).sqrt() * (std::f64::consts::TAU * u()).cos()).collect()
+    }
+
+    #[test]
+    fn gaussian_velocities_pass_and_uniform_ones_fail() {
+        let g = gaussian(3 * 300);
+        let v: Vec<[f64; 3]> = g.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let (_, p, _) = ks_maxwell_boltzmann(&v, &vec![1.0; 300]);
+        assert!(p > 0.05, "a Gaussian sample is rejected: p = {p}");
+        // uniform components of unit variance differ from the normal by D ≈ 0.052: 9000 of them
+        // make that unmistakable
+        let uniform: Vec<[f64; 3]> = (0..3000)
+            .map(|i| {
+                let x = (i as f64 + 0.5) / 3000.0 * 2.0 - 1.0;
+                [x, -x, x]
+            })
+            .collect();
+        let (_, p, _) = ks_maxwell_boltzmann(&uniform, &vec![1.0; 3000]);
+        assert!(p < 1e-3, "a uniform sample passes: p = {p}");
     }
 }

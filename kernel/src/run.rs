@@ -25,12 +25,14 @@ pub enum Stop {
 #[derive(Debug, Clone, Serialize)]
 pub struct Measured {
     pub name: &'static str,
-    pub predicted: f64,
+    pub predicted: Option<f64>,
     pub measured: Option<f64>,
     pub rel_diff: Option<f64>,
     pub tol: Option<f64>,
     /// Within `tol` (true when no tol was given and a period was measured).
     pub agrees: bool,
+    /// What a statistical test saw.
+    pub detail: Option<String>,
 }
 
 pub struct Report {
@@ -125,10 +127,18 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let predictions = meters
         .iter()
         .map(|(m, p)| {
-            let measured = m.measured();
-            let rel_diff = measured.map(|t| (t - p.predicted).abs() / p.predicted);
-            let agrees = rel_diff.is_some_and(|d| p.tol.is_none_or(|tol| d <= tol));
-            Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees }
+            let (measured, detail) = m.measured().unzip();
+            let detail = detail.flatten();
+            let (rel_diff, agrees) = match (p.predicted, measured) {
+                (Some(want), Some(got)) => {
+                    let d = (got - want).abs() / want;
+                    (Some(d), p.tol.is_none_or(|tol| d <= tol))
+                }
+                // a statistical test: the measured value is its p-value
+                (None, Some(pv)) => (None, pv >= p.tol.unwrap_or(0.01)),
+                (_, None) => (None, false),
+            };
+            Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees, detail }
         })
         .collect();
     Ok(Report { planned_steps: steps, steps: state.step, wall_s, stop, outcome: monitor.finish(), predictions, state })
