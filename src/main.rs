@@ -4,6 +4,7 @@ mod check;
 mod list;
 mod report;
 mod run;
+mod terms;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -35,6 +36,8 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
     Check(check::Args),
     /// List the scenes of a folder with their domains, terms, claims and predictions.
     List(list::Args),
+    /// Print the vocabulary of terms: name, how it is written, parameters and dimensions.
+    Terms,
 }
 
 fn main() -> ExitCode {
@@ -42,5 +45,6 @@ fn main() -> ExitCode {
         Command::Run(args) => run::main(args),
         Command::Check(args) => check::main(args),
         Command::List(args) => list::main(args),
+        Command::Terms => terms::main(),
     }
 }

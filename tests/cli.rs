@@ -250,3 +250,11 @@ fn json_report_has_the_timing_fields() {
     // one "claim" key per verdict: a flattened field must not repeat a key
     assert_eq!(stdout(&o).matches("\"claim\"").count(), v["claims"].as_array().unwrap().len());
 }
+
+/// The language reference's table of terms is the one `lagra terms` prints from the checker.
+#[test]
+fn the_language_reference_lists_the_vocabulary_as_it_is() {
+    let table = stdout(&lagra(&["terms"]));
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/language.md")).unwrap();
+    assert!(doc.contains(&table), "docs/language.md is out of date: paste the output of `lagra terms`");
+}
