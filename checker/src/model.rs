@@ -2,7 +2,7 @@
 //! parameters as exact binary64 values. The kernel's fast graph is built from this, and the
 //! certificate carries it, so a re-check needs nothing else.
 
-use crate::terms::{Kind, Shape, Site};
+use crate::terms::{Kind, Shape};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -33,17 +33,10 @@ pub struct TermInstance {
 }
 
 impl TermInstance {
-    /// Whether this instance removes energy: its Rayleigh function is non-zero at a fixed,
-    /// generic probe state (a bond with zero damping does not). A wrong "no" could only make an
-    /// energy claim fail, never pass: the balance would then miss a real loss.
+    /// Whether this instance can remove energy (its kind's own rule: a bond with zero damping
+    /// cannot).
     pub fn dissipates(&self) -> bool {
-        let probe = |i: usize| {
-            let k = i as f64;
-            Site { x: [k + 1.0, 2.0 * k + 0.5, 0.25 * k], v: [0.3 * (k + 1.0), -0.7 * k, 1.1], m: 1.0, q: 1.0 }
-        };
-        let sites: Vec<Site<f64>> = (0..self.kind.spec().shape.arity()).map(probe).collect();
-        let s: Vec<&Site<f64>> = sites.iter().collect();
-        self.kind.rayleigh(&self.params, &s).is_some_and(|f| f != 0.0)
+        self.kind.dissipates(&self.params)
     }
 }
 

@@ -1,9 +1,9 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
-use crate::model::{Cell, Model, Snapshot};
+use crate::model::{Cell, Model, Snapshot, TermInstance};
 use crate::real::{norm2, sub3, Real, Vec3};
-use crate::terms::{Kind, Shape, Site};
+use crate::terms::{Shape, Site};
 use std::borrow::Cow;
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
@@ -49,8 +49,13 @@ impl<R: Real> Lifted<R> {
 
     /// Calls `f` with the sites of every instance of every term, in a fixed order; pairs and
     /// bonds see each other's nearest periodic image.
-    fn each_instance(&self, model: &Model, kinds: impl Fn(Kind) -> bool, mut f: impl FnMut(usize, &[&Site<R>])) {
-        for (n, t) in model.terms.iter().enumerate().filter(|(_, t)| kinds(t.kind)) {
+    fn each_instance(
+        &self,
+        model: &Model,
+        which: impl Fn(&TermInstance) -> bool,
+        mut f: impl FnMut(usize, &[&Site<R>]),
+    ) {
+        for (n, t) in model.terms.iter().enumerate().filter(|(_, t)| which(t)) {
             match t.kind.spec().shape {
                 Shape::Bond(_) => {
                     let seen: Vec<Cow<Site<R>>> = t.sites.iter().map(|&j| self.seen_from(t.sites[0], j)).collect();
@@ -95,12 +100,16 @@ impl<R: Real> Lifted<R> {
     /// The rate 2·ΣF at which the dissipative terms remove energy, and which terms do.
     pub fn dissipated_power(&self, model: &Model) -> R {
         let mut p = self.zero.clone();
-        // only the kinds that can dissipate: an all-pairs term is never visited for nothing
-        self.each_instance(model, Kind::dissipative, |n, s| {
-            if let Some(f) = model.terms[n].kind.rayleigh(&self.params[n], s) {
-                p = p.clone() + self.zero.lift(2.0) * f;
-            }
-        });
+        // only the instances that can dissipate: a conservative term is never visited
+        self.each_instance(
+            model,
+            |t| t.dissipates(),
+            |n, s| {
+                if let Some(w) = model.terms[n].kind.power(&self.params[n], s) {
+                    p = p.clone() + w;
+                }
+            },
+        );
         p
     }
 

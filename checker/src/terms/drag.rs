@@ -18,4 +18,8 @@ impl Definition for Drag {
     fn rayleigh<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
         Some(p[0].lift(0.5) * p[0].clone() * norm2(&s[0].v))
     }
+
+    fn dissipates(p: &[f64]) -> bool {
+        p[0] != 0.0
+    }
 }

@@ -31,4 +31,8 @@ impl Definition for HarmonicBond {
         let rdot = dot3(&sub3(&s[1].v, &s[0].v), &d) / norm2(&d).sqrt();
         Some(gamma.lift(0.5) * gamma * rdot.powi(2))
     }
+
+    fn dissipates(p: &[f64]) -> bool {
+        p[2] != 0.0
+    }
 }

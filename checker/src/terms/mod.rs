@@ -82,10 +82,19 @@ pub trait Definition {
     /// Potential energy of the sites `s` (in the order the shape gives) with parameters `p`
     /// (flattened in the order of `SPEC.params`).
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R;
-    /// Rayleigh dissipation function F: the term removes energy at the rate 2F.
+    /// Rayleigh dissipation function F: the term's force on a velocity is −∂F/∂v.
     /// `None` for a conservative term.
     fn rayleigh<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
         None
+    }
+    /// The rate at which the term removes energy, v·∂F/∂v: 2F for a quadratic F (the default).
+    fn power<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
+        Self::rayleigh(p, s).map(|f| f.lift(2.0) * f)
+    }
+    /// Whether an instance with parameters `p` can remove energy at all (a bond with zero
+    /// damping cannot): the energy claim is a balance exactly when some instance can.
+    fn dissipates(_p: &[f64]) -> bool {
+        false
     }
     /// The distance beyond which the term vanishes: its `cutoff` parameter if it has one, else
     /// unbounded (`None`).
@@ -114,6 +123,12 @@ macro_rules! vocabulary {
             pub fn rayleigh<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
                 match self { $(Kind::$kind => $kind::rayleigh(p, s)),* }
             }
+            pub fn power<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
+                match self { $(Kind::$kind => $kind::power(p, s)),* }
+            }
+            pub fn dissipates(self, p: &[f64]) -> bool {
+                match self { $(Kind::$kind => $kind::dissipates(p)),* }
+            }
             pub fn reach(self, p: &[f64]) -> Option<f64> {
                 match self { $(Kind::$kind => $kind::reach(p)),* }
             }
@@ -141,6 +156,7 @@ vocabulary! {
     HarmonicTrap => harmonic_trap,
     ElectricField => electric_field,
     Drag => drag,
+    ContactFloor => contact_floor,
 }
 
 impl Kind {
@@ -149,8 +165,8 @@ impl Kind {
     }
 
     /// The definition evaluated over dimensions: parameters carry their declared dimension,
-    /// sites carry L, L·T⁻¹, M, Q. Returns (potential, dissipation function).
-    fn dimensions(self) -> (Dimension, Option<Dimension>) {
+    /// sites carry L, L·T⁻¹, M, Q. Returns (potential, dissipation function, dissipated power).
+    fn dimensions(self) -> (Dimension, Option<Dimension>, Option<Dimension>) {
         let spec = self.spec();
         let p: Vec<Dimension> =
             spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
@@ -161,7 +177,7 @@ impl Kind {
             q: Dimension::of(Dim::CHARGE),
         };
         let s = vec![&site; spec.shape.arity()];
-        (self.potential(&p, &s), self.rayleigh(&p, &s))
+        (self.potential(&p, &s), self.rayleigh(&p, &s), self.power(&p, &s))
     }
 
     /// Whether the definition has a dissipation function (worked out once per kind).
@@ -173,17 +189,19 @@ impl Kind {
     /// Proves the definition homogeneous: its potential is an energy and its dissipation
     /// function (if any) a power, with no sum of unlike dimensions on the way.
     pub fn check_dimensions(self) -> Result<(), String> {
-        let (v, f) = self.dimensions();
+        let (v, f, w) = self.dimensions();
         let expect = |what: &str, got: Dimension, want: Dim| match got.0 {
             Ok(d) if d == want => Ok(()),
             Ok(d) => Err(format!("{}: {what} has dimension {d}, not {want}", self.name())),
             Err(e) => Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
         };
         expect("potential", v, Dim::ENERGY)?;
-        match f {
-            Some(f) => expect("dissipation function", f, Dim::ENERGY / Dim::TIME),
-            None => Ok(()),
+        for (what, d) in [("dissipation function", f), ("dissipated power", w)] {
+            if let Some(d) = d {
+                expect(what, d, Dim::ENERGY / Dim::TIME)?;
+            }
         }
+        Ok(())
     }
 
     /// The term selected by `keyword` among the terms whose shape satisfies `fits`.
@@ -217,6 +235,6 @@ mod tests {
     #[test]
     fn only_damped_bonds_and_drag_dissipate() {
         let d: Vec<_> = Kind::ALL.iter().filter(|k| k.dissipative()).collect();
-        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag]);
+        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag, &Kind::ContactFloor]);
     }
 }

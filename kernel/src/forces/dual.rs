@@ -171,4 +171,17 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         (energy - v_def).abs() <= 1e-11 * (v_def.abs() + carried) + 1e-300,
         "{kind:?} energy: fast {energy} vs definition {v_def}"
     );
+    // a dissipative term's power is v·∂F/∂v
+    let sites: Vec<Site<f64>> = (0..n).map(|i| Site { x: x[i], v: v[i], m: m[i], q: q[i] }).collect();
+    let refs: Vec<&Site<f64>> = sites.iter().collect();
+    if let Some(power) = kind.power(params, &refs) {
+        let euler: f64 = (0..n)
+            .flat_map(|b| (0..3).map(move |c| (b, c)))
+            .map(|(b, c)| v[b][c] * eval(b, c, true).1.map_or(0.0, |f| f.d))
+            .sum();
+        assert!(
+            (power - euler).abs() <= 1e-11 * (power.abs() + euler.abs()) + 1e-300,
+            "{kind:?} power {power} vs v·∂F/∂v {euler}"
+        );
+    }
 }

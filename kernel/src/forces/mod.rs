@@ -6,6 +6,7 @@
 
 mod groups;
 
+mod contact_floor;
 mod coulomb;
 mod coulomb_reaction_field;
 mod dihedral;
@@ -108,6 +109,7 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::HarmonicTrap => Fields::<harmonic_trap::Fast>::boxed(kind, t),
         Kind::ElectricField => Fields::<electric_field::Fast>::boxed(kind, t),
         Kind::Drag => Fields::<drag::Fast>::boxed(kind, t),
+        Kind::ContactFloor => Fields::<contact_floor::Fast>::boxed(kind, t),
     }
 }
 
