@@ -32,6 +32,8 @@ impl Dim {
     pub const COULOMB: Dim = Dim([1, 3, -2, -2]);
     /// Electric field: force / charge.
     pub const ELECTRIC: Dim = Dim([1, 1, -2, -1]);
+    /// Magnetic field: force / (charge × velocity); tesla = kg/(s·C).
+    pub const MAGNETIC: Dim = Dim([1, 0, -1, -1]);
 
     pub fn pow(self, n: i8) -> Dim {
         Dim(self.0.map(|e| e * n))
@@ -39,7 +41,8 @@ impl Dim {
 
     /// A name for the common dimensions, used in error messages.
     pub fn describe(self) -> Option<&'static str> {
-        const NAMES: [(Dim, &str); 16] = [
+        const NAMES: [(Dim, &str); 17] = [
+            (Dim::MAGNETIC, "magnetic field"),
             (Dim::INVERSE_LENGTH, "1/length"),
             (Dim::ENERGY_LENGTH, "energy·length"),
             (Dim::COULOMB, "energy·length/charge²"),

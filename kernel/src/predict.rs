@@ -15,6 +15,8 @@ pub enum PredictionKind {
     OscillatorPeriod,
     /// Two bodies under Newtonian gravity: T = 2π√(a³/G(m₀+m₁)), a from the vis-viva equation.
     KeplerPeriod,
+    /// A charge in a uniform magnetic field alone: T = 2π m / (|q| |B|), the cyclotron period.
+    CyclotronPeriod,
     /// Statistical: at the end of the run the velocity components, relative to the centre of
     /// mass and scaled by √(m/T) at the measured kinetic temperature T, pass a Kolmogorov–Smirnov
     /// test against the standard normal distribution (p ≥ tol, 0.01 if not given).
@@ -32,13 +34,18 @@ pub struct Prediction {
 }
 
 impl PredictionKind {
-    pub const ALL: [PredictionKind; 3] =
-        [PredictionKind::OscillatorPeriod, PredictionKind::KeplerPeriod, PredictionKind::MaxwellBoltzmann];
+    pub const ALL: [PredictionKind; 4] = [
+        PredictionKind::OscillatorPeriod,
+        PredictionKind::KeplerPeriod,
+        PredictionKind::CyclotronPeriod,
+        PredictionKind::MaxwellBoltzmann,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             PredictionKind::OscillatorPeriod => "oscillator_period",
             PredictionKind::KeplerPeriod => "kepler_period",
+            PredictionKind::CyclotronPeriod => "cyclotron_period",
             PredictionKind::MaxwellBoltzmann => "maxwell_boltzmann",
         }
     }
@@ -91,6 +98,18 @@ impl PredictionKind {
                     Err("the orbit is unbound: it has no period".into())
                 }
             }
+            PredictionKind::CyclotronPeriod => {
+                let (b, body) = match (model.terms.as_slice(), model.bodies.as_slice()) {
+                    ([t], [body]) if t.kind == Kind::MagneticField => {
+                        (Vector3::new(t.params[0], t.params[1], t.params[2]), body)
+                    }
+                    _ => return Err("needs exactly one charged body and one magnetic field, nothing else".into()),
+                };
+                if body.charge == 0.0 || b.norm() == 0.0 {
+                    return Err("the body is neutral or the field is zero: it does not gyrate".into());
+                }
+                Ok(Some(TAU * body.mass / (body.charge.abs() * b.norm())))
+            }
             PredictionKind::MaxwellBoltzmann if model.bodies.len() < 10 => {
                 Err("needs at least 10 bodies for a distribution to test".into())
             }
@@ -104,7 +123,9 @@ pub enum Meter {
     /// Upward zero crossings of the bond extension |r| − r₀.
     Crossings { i: usize, j: usize, r0: f64, last: Option<(f64, f64)>, first: Option<f64>, latest: f64, count: u64 },
     /// Completed revolutions of the relative position in the orbital plane.
-    Revolutions { basis: Option<(Vector3<f64>, Vector3<f64>)>, angle: f64, last: (f64, f64), turns: u64, at: f64 },
+    Revolutions(Winding),
+    /// Completed turns of body 0's velocity about the magnetic field.
+    Gyrations { normal: Vector3<f64>, winding: Winding },
     /// The first and the last velocities, and the masses.
     Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64> },
 }
@@ -124,8 +145,12 @@ impl Meter {
                     count: 0,
                 }
             }
-            PredictionKind::KeplerPeriod => {
-                Meter::Revolutions { basis: None, angle: 0.0, last: (0.0, 0.0), turns: 0, at: 0.0 }
+            PredictionKind::KeplerPeriod => Meter::Revolutions(Winding::default()),
+            PredictionKind::CyclotronPeriod => {
+                let (t, q) = (&model.terms[0], model.bodies[0].charge);
+                // a positive charge turns clockwise about B
+                let normal = -Vector3::new(t.params[0], t.params[1], t.params[2]) * q.signum();
+                Meter::Gyrations { normal, winding: Winding::default() }
             }
             PredictionKind::MaxwellBoltzmann => {
                 Meter::Velocities { first: None, last: vec![], masses: model.bodies.iter().map(|b| b.mass).collect() }
@@ -152,27 +177,12 @@ impl Meter {
                 }
                 *last = Some((t, s));
             }
-            Meter::Revolutions { basis, angle, last, turns, at } => {
+            Meter::Revolutions(w) => {
                 let r = Vector3::from(x[1]) - Vector3::from(x[0]);
-                let (e1, e2) = *basis.get_or_insert_with(|| {
-                    let n = r.cross(&(Vector3::from(v[1]) - Vector3::from(v[0])));
-                    let e1 = r.normalize();
-                    (e1, n.normalize().cross(&e1))
-                });
-                // Unwrapped angle in the orbital plane, counted from the initial direction.
-                let (t0, raw0) = *last;
-                let raw = r.dot(&e2).atan2(r.dot(&e1));
-                let mut d = raw - raw0;
-                d -= TAU * (d / TAU).round();
-                let before = *angle;
-                *angle += d;
-                *last = (t, raw);
-                let target = TAU * (*turns + 1) as f64;
-                if before < target && *angle >= target {
-                    *turns += 1;
-                    *at = t0 + (t - t0) * (target - before) / d;
-                }
+                let n = r.cross(&(Vector3::from(v[1]) - Vector3::from(v[0])));
+                w.push(t, r, n);
             }
+            Meter::Gyrations { normal, winding } => winding.push(t, Vector3::from(v[0]), *normal),
         }
     }
 
@@ -198,9 +208,48 @@ impl Meter {
             Meter::Crossings { first, latest, count, .. } if *count >= 2 => {
                 Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64)
             }
-            Meter::Revolutions { turns, at, .. } if *turns >= 1 => Some(at / *turns as f64),
+            Meter::Revolutions(w) | Meter::Gyrations { winding: w, .. } => w.period(),
             _ => None,
         }
+    }
+}
+
+/// Counts the turns of a vector about a fixed normal, interpolating the time of each.
+#[derive(Default)]
+pub struct Winding {
+    basis: Option<(Vector3<f64>, Vector3<f64>)>,
+    angle: f64,
+    last: (f64, f64),
+    turns: u64,
+    at: f64,
+}
+
+impl Winding {
+    /// The vector `r` at time `t`; `normal` (used at the first call) fixes the plane and the
+    /// positive sense of rotation.
+    fn push(&mut self, t: f64, r: Vector3<f64>, normal: Vector3<f64>) {
+        let (e1, e2) = *self.basis.get_or_insert_with(|| {
+            let n = normal.normalize();
+            let e1 = (r - n * r.dot(&n)).normalize();
+            (e1, n.cross(&e1))
+        });
+        // Unwrapped angle in the plane, counted from the initial direction.
+        let (t0, raw0) = self.last;
+        let raw = r.dot(&e2).atan2(r.dot(&e1));
+        let mut d = raw - raw0;
+        d -= TAU * (d / TAU).round();
+        let before = self.angle;
+        self.angle += d;
+        self.last = (t, raw);
+        let target = TAU * (self.turns + 1) as f64;
+        if before < target && self.angle >= target {
+            self.turns += 1;
+            self.at = t0 + (t - t0) * (target - before) / d;
+        }
+    }
+
+    fn period(&self) -> Option<f64> {
+        (self.turns >= 1).then(|| self.at / self.turns as f64)
     }
 }
 

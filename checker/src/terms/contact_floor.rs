@@ -1,8 +1,8 @@
-//! A floor, the plane y = y₀ with normal +y, as a penalty contact: inside it (depth δ = y₀ − y
-//! > 0) a spring V = ½kδ², and a Rayleigh function ½c v_y² + μkδ(√(|v_t|² + s²) − s): damping
-//! along the normal and Coulomb friction against the tangential velocity v_t, regularised by the
-//! slip speed s so the force is defined at rest (−μkδ v_t/√(|v_t|² + s²), nearly μkδ once
-//! |v_t| ≫ s). Outside the floor, nothing.
+//! A floor, the plane y = y₀ with normal +y, as a penalty contact. Inside it, at depth
+//! δ = y₀ − y, a spring V = ½kδ² and a Rayleigh function ½c v_y² + μkδ(√(|v_t|² + s²) − s):
+//! damping along the normal and Coulomb friction against the tangential velocity v_t,
+//! regularised by the slip speed s so the force is defined at rest (−μkδ v_t/√(|v_t|² + s²),
+//! nearly μkδ once |v_t| ≫ s). Outside the floor, nothing.
 
 use super::{Definition, Param, Shape, Site, Spec};
 use crate::real::{select, Real};

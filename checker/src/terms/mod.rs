@@ -91,6 +91,11 @@ pub trait Definition {
     fn power<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
         Self::rayleigh(p, s).map(|f| f.lift(2.0) * f)
     }
+    /// The part of the Lagrangian linear in the velocities (a magnetic q A·v): it exerts the
+    /// force ∂L/∂x − d/dt ∂L/∂v and does no work, so it adds nothing to the energy H.
+    fn gyroscopic<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
+        None
+    }
     /// Whether an instance with parameters `p` can remove energy at all (a bond with zero
     /// damping cannot): the energy claim is a balance exactly when some instance can.
     fn dissipates(_p: &[f64]) -> bool {
@@ -126,6 +131,9 @@ macro_rules! vocabulary {
             pub fn power<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
                 match self { $(Kind::$kind => $kind::power(p, s)),* }
             }
+            pub fn gyroscopic<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
+                match self { $(Kind::$kind => $kind::gyroscopic(p, s)),* }
+            }
             pub fn dissipates(self, p: &[f64]) -> bool {
                 match self { $(Kind::$kind => $kind::dissipates(p)),* }
             }
@@ -157,6 +165,7 @@ vocabulary! {
     ElectricField => electric_field,
     Drag => drag,
     ContactFloor => contact_floor,
+    MagneticField => magnetic_field,
 }
 
 impl Kind {
@@ -180,6 +189,18 @@ impl Kind {
         (self.potential(&p, &s), self.rayleigh(&p, &s), self.power(&p, &s))
     }
 
+    fn gyroscopic_dimension(self) -> Option<Dimension> {
+        let p: Vec<Dimension> =
+            self.spec().params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
+        let site = Site {
+            x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
+            v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
+            m: Dimension::of(Dim::MASS),
+            q: Dimension::of(Dim::CHARGE),
+        };
+        self.gyroscopic(&p, &vec![&site; self.spec().shape.arity()])
+    }
+
     /// Whether the definition has a dissipation function (worked out once per kind).
     pub fn dissipative(self) -> bool {
         static TABLE: OnceLock<Vec<bool>> = OnceLock::new();
@@ -196,6 +217,9 @@ impl Kind {
             Err(e) => Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
         };
         expect("potential", v, Dim::ENERGY)?;
+        if let Some(g) = self.gyroscopic_dimension() {
+            expect("velocity-dependent Lagrangian", g, Dim::ENERGY)?;
+        }
         for (what, d) in [("dissipation function", f), ("dissipated power", w)] {
             if let Some(d) = d {
                 expect(what, d, Dim::ENERGY / Dim::TIME)?;

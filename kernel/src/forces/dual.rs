@@ -146,8 +146,30 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         let s: Vec<&Site<Dual>> = sites.iter().collect();
         (kind.potential(&p, &s), kind.rayleigh(&p, &s))
     };
+    // The velocity-linear part of L, at positions x + ε·xd and velocities vel.
+    let gyro = |xd: &dyn Fn(usize, usize) -> f64, vel: &dyn Fn(usize, usize) -> f64| -> Option<Dual> {
+        let sites: Vec<Site<Dual>> = (0..n)
+            .map(|i| Site {
+                x: std::array::from_fn(|k| Dual { v: x[i][k], d: xd(i, k) }),
+                v: std::array::from_fn(|k| Dual { v: vel(i, k), d: 0.0 }),
+                m: Dual { v: m[i], d: 0.0 },
+                q: Dual { v: q[i], d: 0.0 },
+            })
+            .collect();
+        let p: Vec<Dual> = params.iter().map(|&c| Dual { v: c, d: 0.0 }).collect();
+        kind.gyroscopic(&p, &sites.iter().collect::<Vec<_>>())
+    };
+    // Its Euler–Lagrange force ∂L/∂x_bc − (v·∇)∂L/∂v_bc; ∂L/∂v_bc is L at the unit velocity e_bc.
+    let lorentz = |b: usize, c: usize| -> f64 {
+        let at_v = |i: usize, k: usize| v[i][k];
+        let dl_dx = gyro(&|i, k| if (i, k) == (b, c) { 1.0 } else { 0.0 }, &at_v).map_or(0.0, |g| g.d);
+        let transport = gyro(&at_v, &|i, k| if (i, k) == (b, c) { 1.0 } else { 0.0 }).map_or(0.0, |g| g.d);
+        dl_dx - transport
+    };
     let exact: Vec<[f64; 3]> = (0..n)
-        .map(|b| std::array::from_fn(|c| -eval(b, c, false).0.d - eval(b, c, true).1.map_or(0.0, |f| f.d)))
+        .map(|b| {
+            std::array::from_fn(|c| -eval(b, c, false).0.d - eval(b, c, true).1.map_or(0.0, |f| f.d) + lorentz(b, c))
+        })
         .collect();
     // The round-off the inputs carry into V: |V| + Σ |∂V/∂x|·(|x| + 1).
     let v_def = eval(0, 0, false).0.v;

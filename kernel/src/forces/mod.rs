@@ -19,6 +19,7 @@ mod harmonic_angle;
 mod harmonic_bond;
 mod harmonic_trap;
 mod lennard_jones;
+mod magnetic_field;
 mod morse_bond;
 mod nuclear_yukawa;
 mod uniform_acceleration;
@@ -110,6 +111,7 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::ElectricField => Fields::<electric_field::Fast>::boxed(kind, t),
         Kind::Drag => Fields::<drag::Fast>::boxed(kind, t),
         Kind::ContactFloor => Fields::<contact_floor::Fast>::boxed(kind, t),
+        Kind::MagneticField => Fields::<magnetic_field::Fast>::boxed(kind, t),
     }
 }
 

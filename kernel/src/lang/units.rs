@@ -46,6 +46,7 @@ const WORDS: &[(&str, Dim, f64, i32)] = &[
     ("Hz", Dim([0, 0, -1, 0]), 1.0, 0),
     ("C", Dim::CHARGE, 1.0, 0),
     ("N", Dim([1, 1, -2, 0]), 1.0, 0),
+    ("T", Dim::MAGNETIC, 1.0, 0),
     ("J", Dim::ENERGY, 1.0, 0),
     ("eV", Dim::ENERGY, 1.602_176_634, -19),
     ("rad", Dim::NONE, 1.0, 0),
