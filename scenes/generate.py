@@ -175,9 +175,43 @@ def dam_break():
     write("dam_break", "// A dam break: about 441 particles with bond tension, a floor and gravity.\n", lines)
 
 
+def cross_domain():
+    rng = random.Random(3)
+    n = 12
+    xs = [[0.9 * i, 2.0 + 0.3 * math.sin(i), 0.0] for i in range(n)]
+    masses = [1.0] * n
+    vels = scale_to(zero_momentum([[rng.gauss(0, 1) for _ in range(3)] for _ in range(n)], masses), masses, 0.2)
+    lines = [
+        "scene cross_domain {",
+        "  uses multiphysics.polymer_electromagnetism_contact",
+        '  description "A charged bead-spring chain in a magnetic field falls onto a floor with friction."',
+        "  entity plus { mass: 1.0, charge: 0.5, size: 0.4 }",
+        "  entity minus { mass: 1.0, charge: -0.5, size: 0.4 }",
+    ]
+    lines += [f"  entity {{ type: {'plus' if i % 2 == 0 else 'minus'}, position: {vec(x)}, velocity: {vec(v)} }}" for i, (x, v) in enumerate(zip(xs, vels))]
+    lines += [f"  bond fene [{i}, {i + 1}] {{ k: 30, R0: 1.5 }}" for i in range(n - 1)]
+    lines += [
+        "  // soft matter: FENE chain with WCA excluded volume",
+        "  interaction wca { epsilon: 1, sigma: 0.8 }",
+        "  // electromagnetism: charges interact and gyrate",
+        "  interaction coulomb { k: 1 }",
+        "  magnetic { B: [0, 2, 0] }",
+        "  // contact mechanics under gravity",
+        "  gravity { g: [0, -9.81, 0] }",
+        "  floor { y: 0.0, k: 5e3, damping: 2.0, friction: 0.4, slip: 0.1 }",
+        "  @expect energy_conservation { tol: 1e-4 }",
+        "  @expect distance { between: [0, 1], min: 0.5, max: 1.5 }",
+        "  @expect distance { between: [5, 6], min: 0.5, max: 1.5 }",
+        "  @expect dimensional_consistency",
+        "  solver { dt: 0.0005, duration: 1.5, steps_per_frame: 40 }",
+    ]
+    write("cross_domain", "// Terms from three domains at once: polymers, electromagnetism, contact mechanics.\n", lines)
+
+
 if __name__ == "__main__":
     pendulum_chain()
     kremer_grest_polymer()
     lj_liquid()
     ionic_pair_plasma()
     dam_break()
+    cross_domain()

@@ -15,6 +15,9 @@ pub enum PredictionKind {
     OscillatorPeriod,
     /// Two bodies under Newtonian gravity: T = 2π√(a³/G(m₀+m₁)), a from the vis-viva equation.
     KeplerPeriod,
+    /// Bounded motion: 2⟨T⟩ = −⟨Σ x·F⟩ over the run (the virial theorem); predicted ratio 1.
+    /// Exact for time averages over whole periods, or long enough.
+    Virial,
     /// A charge in a uniform magnetic field alone: T = 2π m / (|q| |B|), the cyclotron period.
     CyclotronPeriod,
     /// Statistical: at the end of the run the velocity components, relative to the centre of
@@ -34,9 +37,10 @@ pub struct Prediction {
 }
 
 impl PredictionKind {
-    pub const ALL: [PredictionKind; 4] = [
+    pub const ALL: [PredictionKind; 5] = [
         PredictionKind::OscillatorPeriod,
         PredictionKind::KeplerPeriod,
+        PredictionKind::Virial,
         PredictionKind::CyclotronPeriod,
         PredictionKind::MaxwellBoltzmann,
     ];
@@ -45,6 +49,7 @@ impl PredictionKind {
         match self {
             PredictionKind::OscillatorPeriod => "oscillator_period",
             PredictionKind::KeplerPeriod => "kepler_period",
+            PredictionKind::Virial => "virial",
             PredictionKind::CyclotronPeriod => "cyclotron_period",
             PredictionKind::MaxwellBoltzmann => "maxwell_boltzmann",
         }
@@ -98,6 +103,10 @@ impl PredictionKind {
                     Err("the orbit is unbound: it has no period".into())
                 }
             }
+            PredictionKind::Virial if model.terms.iter().any(|t| t.dissipates() || t.kind == Kind::MagneticField) => {
+                Err("needs conservative, position-dependent forces".into())
+            }
+            PredictionKind::Virial => Ok(Some(1.0)),
             PredictionKind::CyclotronPeriod => {
                 let (b, body) = match (model.terms.as_slice(), model.bodies.as_slice()) {
                     ([t], [body]) if t.kind == Kind::MagneticField => {
@@ -126,6 +135,8 @@ pub enum Meter {
     Revolutions(Winding),
     /// Completed turns of body 0's velocity about the magnetic field.
     Gyrations { normal: Vector3<f64>, winding: Winding },
+    /// Running sums of 2T and of −Σ x·F over the states of the run.
+    Virial { masses: Vec<f64>, kinetic: f64, virial: f64, states: u64 },
     /// The first and the last velocities, and the masses.
     Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64> },
 }
@@ -146,6 +157,12 @@ impl Meter {
                 }
             }
             PredictionKind::KeplerPeriod => Meter::Revolutions(Winding::default()),
+            PredictionKind::Virial => Meter::Virial {
+                masses: model.bodies.iter().map(|b| b.mass).collect(),
+                kinetic: 0.0,
+                virial: 0.0,
+                states: 0,
+            },
             PredictionKind::CyclotronPeriod => {
                 let (t, q) = (&model.terms[0], model.bodies[0].charge);
                 // a positive charge turns clockwise about B
@@ -158,8 +175,19 @@ impl Meter {
         }
     }
 
-    pub fn observe(&mut self, t: f64, x: &[[f64; 3]], v: &[[f64; 3]]) {
+    /// One state of the run: time, positions, velocities, and the forces there.
+    pub fn observe(&mut self, t: f64, x: &[[f64; 3]], v: &[[f64; 3]], f: &[[f64; 3]]) {
         match self {
+            Meter::Virial { masses, kinetic, virial, states } => {
+                *kinetic += x
+                    .iter()
+                    .zip(v)
+                    .zip(masses.iter())
+                    .map(|((_, v), m)| m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+                    .sum::<f64>();
+                *virial -= x.iter().zip(f).map(|(x, f)| x[0] * f[0] + x[1] * f[1] + x[2] * f[2]).sum::<f64>();
+                *states += 1;
+            }
             Meter::Velocities { first, last, .. } => {
                 first.get_or_insert_with(|| v.to_vec());
                 last.clear();
@@ -209,6 +237,7 @@ impl Meter {
                 Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64)
             }
             Meter::Revolutions(w) | Meter::Gyrations { winding: w, .. } => w.period(),
+            Meter::Virial { kinetic, virial, states, .. } if *states > 1 => Some(kinetic / virial),
             _ => None,
         }
     }

@@ -102,7 +102,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
         Ok(mut solver) => {
             stop = check(&state)?;
-            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, &solver.f));
             trace(&state, solver.potential)?;
             while stop.is_none() && state.step < steps {
                 if let Err(e) = solver.step(&graph, &mut state, dt) {
@@ -113,7 +113,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 if stop.is_none() && !solver.potential.is_finite() {
                     stop = non_finite(&state);
                 }
-                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v));
+                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, &solver.f));
                 if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
                     trace(&state, solver.potential)?;
                 }

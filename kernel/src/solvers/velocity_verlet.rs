@@ -16,7 +16,8 @@ use crate::state::State;
 const MAX_ITERATIONS: usize = 8;
 
 pub struct VelocityVerlet {
-    f: Vec<[f64; 3]>,
+    /// The forces at the current state.
+    pub f: Vec<[f64; 3]>,
     /// Potential energy at the current state (the witness of the last evaluation).
     pub potential: f64,
 }
