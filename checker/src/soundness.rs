@@ -194,3 +194,66 @@ proptest! {
         }
     }
 }
+
+/// Which symmetries each term's potential has (the `noether` crate will derive this; here it is
+/// the expectation): translation of every body, and rotation about the origin (terms with a
+/// centre are tested with it at the origin).
+fn symmetric(kind: Kind) -> (bool, bool) {
+    use crate::terms::Shape;
+    match kind {
+        Kind::UniformAcceleration | Kind::ElectricField | Kind::ContactFloor => (false, false),
+        Kind::GravityWell | Kind::HarmonicTrap => (false, true),
+        Kind::Drag | Kind::MagneticField => (true, true),
+        k => {
+            assert!(k.spec().shape != Shape::External, "{k:?}: say which symmetries it has");
+            (true, true)
+        }
+    }
+}
+
+/// The definition's potential in binary64 at positions `x`.
+fn potential_at(kind: Kind, params: &[f64], x: &[[f64; 3]]) -> f64 {
+    let bodies: Vec<Body3> = x
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (*x, [0.1, -0.2, 0.3], 1.0 + i as f64, if i % 2 == 0 { 1.0 } else { -0.7 }))
+        .collect();
+    eval(kind, params, &bodies, &0.0f64).0
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn each_term_has_exactly_its_symmetries(
+        params in prop::collection::vec(0.5f64..2.0, 8),
+        x in prop::collection::vec(prop::array::uniform3(-2.0f64..2.0), 4),
+        shift in prop::array::uniform3(0.5f64..2.0),
+        angle in 0.3f64..2.8,
+    ) {
+        let (c, s) = (angle.cos(), angle.sin());
+        for &kind in Kind::ALL {
+            let spec = kind.spec();
+            let mut p = params[..spec.width()].to_vec();
+            // centred terms at the origin; cutoffs beyond every distance here; a floor above
+            for (q, at) in spec.params.iter().scan(0, |at, q| { let a = *at; *at += q.len; Some((q, a)) }) {
+                match q.name {
+                    "center" => p[at..at + 3].fill(0.0),
+                    "cutoff" => p[at] = 50.0,
+                    "R0" => p[at] = 50.0,
+                    "y" => p[at] = 5.0,
+                    _ => {}
+                }
+            }
+            let v0 = potential_at(kind, &p, &x);
+            let moved: Vec<[f64; 3]> = x.iter().map(|x| std::array::from_fn(|k| x[k] + shift[k])).collect();
+            let turned: Vec<[f64; 3]> = x.iter().map(|x| [c * x[0] - s * x[1], s * x[0] + c * x[1], x[2]]).collect();
+            let (vt, vr) = (potential_at(kind, &p, &moved), potential_at(kind, &p, &turned));
+            prop_assume!(v0.is_finite() && vt.is_finite() && vr.is_finite());
+            let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (a.abs() + b.abs() + 1e-300);
+            let (translation, rotation) = symmetric(kind);
+            prop_assert_eq!(same(v0, vt), translation, "{:?} translation: {} vs {}", kind, v0, vt);
+            prop_assert_eq!(same(v0, vr), rotation, "{:?} rotation: {} vs {}", kind, v0, vr);
+        }
+    }
+}
