@@ -208,6 +208,63 @@ def cross_domain():
     write("cross_domain", "// Terms from three domains at once: polymers, electromagnetism, contact mechanics.\n", lines)
 
 
+def angle(a, b, c):
+    u, w = [a[k] - b[k] for k in range(3)], [c[k] - b[k] for k in range(3)]
+    cos = sum(p * q for p, q in zip(u, w)) / math.sqrt(sum(p * p for p in u) * sum(q * q for q in w))
+    return math.acos(max(-1.0, min(1.0, cos)))
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def dihedral(x0, x1, x2, x3):
+    b1, b2, b3 = ([q[k] - p[k] for k in range(3)] for p, q in ((x0, x1), (x1, x2), (x2, x3)))
+    n1, n2 = cross(b1, b2), cross(b2, b3)
+    dot = lambda a, b: sum(p * q for p, q in zip(a, b))
+    return math.atan2(math.sqrt(dot(b2, b2)) * dot(b1, n2), dot(n1, n2))
+
+
+def dna_helix():
+    n, radius, rise, twist = 30, 1.0, 0.5, math.radians(36)
+    strand = lambda phase: [[radius * math.cos(i * twist + phase), radius * math.sin(i * twist + phase), rise * i] for i in range(n)]
+    a, b = strand(0.0), strand(math.pi)
+    xs = a + b
+    rng = random.Random(5)
+    masses = [1.0] * len(xs)
+    vels = scale_to(zero_momentum([[rng.gauss(0, 1) for _ in range(3)] for _ in xs], masses), masses, 0.01)
+    lines = [
+        "scene dna_helix {",
+        "  uses soft_matter.biopolymers",
+        '  description "A coarse-grained double helix: two 30-bead strands, 10 beads per turn, paired across."',
+        "  entity backbone { mass: 1.0, charge: -0.2, size: 0.4 }",
+    ]
+    lines += [f"  entity {{ type: backbone, position: {vec(x)}, velocity: {vec(v)} }}" for x, v in zip(xs, vels)]
+    for off, st in ((0, a), (n, b)):
+        for i in range(n - 1):
+            lines.append(f"  bond harmonic [{off + i}, {off + i + 1}] {{ k: 100, r0: {math.dist(st[i], st[i + 1]):.12g} }}")
+        for i in range(n - 2):
+            lines.append(f"  bond angle [{off + i}, {off + i + 1}, {off + i + 2}] {{ k: 20, theta0: {angle(st[i], st[i + 1], st[i + 2]):.12g} }}")
+        for i in range(n - 3):
+            # a minimum at the initial twist: k(1 + cos(φ − δ)) is least at φ − δ = π
+            phase = dihedral(*st[i:i + 4]) - math.pi
+            lines.append(f"  bond dihedral [{off + i}, {off + i + 1}, {off + i + 2}, {off + i + 3}] {{ k: 1, n: 1, phase: {phase:.12g} }}")
+    lines += [f"  bond morse [{i}, {n + i}] {{ D: 5, a: 2, r0: 2 }}   // base pair {i}" for i in range(n)]
+    lines += [
+        "  interaction coulomb { k: 1 }   // the charged backbones repel",
+        "  @expect energy_conservation { tol: 1e-4, every: 5 }",
+        "  @expect momentum_conservation { every: 5 }",
+        "  @expect angular_momentum_conservation { every: 5 }",
+        "  // it stays a helix: the pairs stay paired, and one turn along a strand stays one pitch",
+        f"  @expect distance {{ between: [0, {n}], min: 1.6, max: 2.4 }}",
+        f"  @expect distance {{ between: [{n // 2}, {n + n // 2}], min: 1.6, max: 2.4 }}",
+        "  @expect distance { between: [5, 15], min: 4.5, max: 5.5 }",
+        "  @expect dimensional_consistency",
+        "  solver { dt: 0.002, steps: 5000, steps_per_frame: 50 }",
+    ]
+    write("dna_helix", "// A coarse-grained DNA double helix (reduced units): harmonic, angle, dihedral, Morse pairing, Coulomb.\n", lines)
+
+
 if __name__ == "__main__":
     pendulum_chain()
     kremer_grest_polymer()
@@ -215,3 +272,4 @@ if __name__ == "__main__":
     ionic_pair_plasma()
     dam_break()
     cross_domain()
+    dna_helix()

@@ -146,7 +146,7 @@ fn bad_input_is_one_located_line_a_caret_and_exit_2() {
             "bond harmonic",
             "bond elastic",
             "keyword",
-            "unknown bond `elastic`; known: harmonic, morse, fene, angle, dihedral",
+            "unknown bond `elastic`; known: harmonic, morse, fene, angle, dihedral, hbond",
         ),
         ("position: [-1.35", "position: [-1e400", "nonfinite", "non-finite number `-1e400`"),
     ];

@@ -150,6 +150,7 @@ vocabulary! {
     FeneBond => fene_bond,
     HarmonicAngle => harmonic_angle,
     Dihedral => dihedral,
+    HydrogenBond => hydrogen_bond,
     Gravity => gravity,
     LennardJones => lennard_jones,
     LennardJonesShifted => lennard_jones_shifted,

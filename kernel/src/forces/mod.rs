@@ -18,6 +18,7 @@ mod gravity_well;
 mod harmonic_angle;
 mod harmonic_bond;
 mod harmonic_trap;
+mod hydrogen_bond;
 mod lennard_jones;
 mod magnetic_field;
 mod morse_bond;
@@ -96,6 +97,7 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::FeneBond => Bonds::<fene_bond::Fast, 2>::boxed(kind, t, m),
         Kind::HarmonicAngle => Bonds::<harmonic_angle::Fast, 3>::boxed(kind, t, m),
         Kind::Dihedral => Bonds::<dihedral::Fast, 4>::boxed(kind, t, m),
+        Kind::HydrogenBond => Bonds::<hydrogen_bond::Fast, 3>::boxed(kind, t, m),
         Kind::Gravity => Pairs::<gravity::Fast>::boxed(kind, t, m),
         Kind::LennardJones => Pairs::<lennard_jones::Plain>::boxed(kind, t, m),
         Kind::LennardJonesShifted => Pairs::<lennard_jones::Shifted>::boxed(kind, t, m),

@@ -42,7 +42,7 @@ fn unknown_keyword() {
     );
     assert_eq!(
         error("bond harmonic", "bond spring"),
-        at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral")
+        at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral, hbond")
     );
     assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance"));
 }
