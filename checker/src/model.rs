@@ -19,6 +19,13 @@ pub enum UnitSystem {
 pub struct Body {
     pub mass: f64,
     pub charge: f64,
+    /// Colour charge, a weight of SU(3)'s fundamental representation (zero: colourless).
+    #[serde(default, skip_serializing_if = "colourless")]
+    pub colour: [f64; 2],
+}
+
+fn colourless(c: &[f64; 2]) -> bool {
+    *c == [0.0; 2]
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,7 +110,7 @@ impl Model {
             if !(b.mass.is_finite() && b.mass > 0.0) {
                 return Err(format!("body {i}: mass must be finite and positive, got {}", b.mass));
             }
-            if !b.charge.is_finite() {
+            if !b.charge.is_finite() || b.colour.iter().any(|c| !c.is_finite()) {
                 return Err(format!("body {i}: charge must be finite, got {}", b.charge));
             }
         }

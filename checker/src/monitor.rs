@@ -353,7 +353,10 @@ mod tests {
         Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 1.0, charge: 0.0 }],
+            bodies: vec![
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+            ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
         }
     }
@@ -439,7 +442,7 @@ mod tests {
         let model = Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0 }],
+            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
         };
         (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])

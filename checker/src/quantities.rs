@@ -23,7 +23,13 @@ impl<R: Real> Lifted<R> {
             .bodies
             .iter()
             .zip(s.x.iter().zip(s.v))
-            .map(|(b, (x, v))| Site { x: lift3(x), v: lift3(v), m: proto.lift(b.mass), q: proto.lift(b.charge) })
+            .map(|(b, (x, v))| Site {
+                x: lift3(x),
+                v: lift3(v),
+                m: proto.lift(b.mass),
+                q: proto.lift(b.charge),
+                colour: b.colour.map(|c| proto.lift(c)),
+            })
             .collect();
         let params = model.terms.iter().map(|t| t.params.iter().map(|&c| proto.lift(c)).collect()).collect();
         Lifted { sites, params, zero: proto.lift(0.0), x: s.x.to_vec(), cell: model.cell }
@@ -146,9 +152,9 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0 },
-                Body { mass: 2.5, charge: 0.0 },
-                Body { mass: 0.5, charge: 0.0 },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 2.5, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 0.5, charge: 0.0, colour: [0.0; 2] },
             ],
             terms: vec![
                 TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![k, r0, gamma] },

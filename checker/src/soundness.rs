@@ -22,7 +22,9 @@ fn inside(i: Interval, f: &Float) -> bool {
 }
 
 fn site<R: Real>(proto: &R, x: [f64; 3], v: [f64; 3], m: f64, q: f64) -> Site<R> {
-    Site { x: x.map(|c| proto.lift(c)), v: v.map(|c| proto.lift(c)), m: proto.lift(m), q: proto.lift(q) }
+    // a colour charge that varies with the electric one, so colour terms see varied pairs
+    let colour = [proto.lift(q / 2.0), proto.lift(1.0 / (2.0 * 3f64.sqrt()) - q / 10.0)];
+    Site { x: x.map(|c| proto.lift(c)), v: v.map(|c| proto.lift(c)), m: proto.lift(m), q: proto.lift(q), colour }
 }
 
 type Body3 = ([f64; 3], [f64; 3], f64, f64);
@@ -71,7 +73,11 @@ fn model() -> Model {
     Model {
         units: UnitSystem::Reduced,
         cell: None,
-        bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 2.0, charge: 0.0 }, Body { mass: 0.5, charge: 0.0 }],
+        bodies: vec![
+            Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+            Body { mass: 2.0, charge: 0.0, colour: [0.0; 2] },
+            Body { mass: 0.5, charge: 0.0, colour: [0.0; 2] },
+        ],
         terms: vec![
             TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![3.0, 1.0, 0.0] },
             TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.5] },

@@ -58,7 +58,7 @@ impl Dim {
             (Dim::STIFFNESS, "energy/length²"),
             (Dim::DAMPING, "mass/time"),
             (Dim::GRAVITATIONAL, "length³/(mass·time²)"),
-            (Dim([1, 1, -2, 0]), "force"),
+            (Dim([1, 1, -2, 0]), "force (energy/length)"),
         ];
         NAMES.iter().find(|(d, _)| *d == self).map(|(_, n)| *n)
     }

@@ -10,6 +10,7 @@ use lagra_checker::terms::Kind;
 pub struct LagrangianGraph {
     pub masses: Vec<f64>,
     charges: Vec<f64>,
+    colours: Vec<[f64; 2]>,
     groups: Vec<(Kind, Box<dyn Force>)>,
 }
 
@@ -23,7 +24,8 @@ impl LagrangianGraph {
             }
         }
         let masses = model.bodies.iter().map(|b| b.mass).collect();
-        LagrangianGraph { masses, charges: model.bodies.iter().map(|b| b.charge).collect(), groups }
+        let charges = model.bodies.iter().map(|b| b.charge).collect();
+        LagrangianGraph { masses, charges, colours: model.bodies.iter().map(|b| b.colour).collect(), groups }
     }
 
     /// The kinds present, in dispatch order.
@@ -39,7 +41,7 @@ impl LagrangianGraph {
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
-        let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges };
+        let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges, c: &self.colours };
         let mut potential = 0.0;
         for (_, g) in &self.groups {
             potential += g.accumulate(&frame, f)?;

@@ -15,6 +15,8 @@ pub struct Site<R> {
     pub v: Vec3<R>,
     pub m: R,
     pub q: R,
+    /// Colour charge (a weight of SU(3)), zero for colourless bodies.
+    pub colour: [R; 2],
 }
 
 /// Which bodies a term acts on.
@@ -160,6 +162,7 @@ vocabulary! {
     CoulombReactionField => coulomb_reaction_field,
     Yukawa => yukawa,
     NuclearYukawa => nuclear_yukawa,
+    QcdCoulomb => qcd_coulomb,
     UniformAcceleration => uniform_acceleration,
     GravityWell => gravity_well,
     HarmonicTrap => harmonic_trap,
@@ -185,6 +188,7 @@ impl Kind {
             v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
             m: Dimension::of(Dim::MASS),
             q: Dimension::of(Dim::CHARGE),
+            colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
         };
         let s = vec![&site; spec.shape.arity()];
         (self.potential(&p, &s), self.rayleigh(&p, &s), self.power(&p, &s))
@@ -198,6 +202,7 @@ impl Kind {
             v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
             m: Dimension::of(Dim::MASS),
             q: Dimension::of(Dim::CHARGE),
+            colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
         };
         self.gyroscopic(&p, &vec![&site; self.spec().shape.arity()])
     }

@@ -7,7 +7,7 @@ use super::Paired;
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         let (rc, e) = (p[1], p[2]);
         let krf = (e - 1.0) / ((2.0 * e + 1.0) * rc * rc * rc);
         let crf = 1.0 / rc + krf * rc * rc;

@@ -115,12 +115,14 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     let sites = if matches!(kind.spec().shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
     let term = TermInstance { kind, sites, params: params.to_vec() };
     let q: Vec<f64> = (0..n).map(|_| rng.uniform(-2.0, 2.0)).collect();
-    let bodies = m.iter().zip(&q).map(|(&mass, &charge)| Body { mass, charge }).collect();
+    let colour: Vec<[f64; 2]> = (0..n).map(|_| [rng.uniform(-0.5, 0.5), rng.uniform(-0.6, 0.6)]).collect();
+    let bodies =
+        m.iter().zip(&q).zip(&colour).map(|((&mass, &charge), &colour)| Body { mass, charge, colour }).collect();
     let model = Model { units: UnitSystem::Reduced, cell: None, bodies, terms: vec![term.clone()] };
 
     let mut fast = vec![[0.0; 3]; n];
     let energy = group(kind, &[&term], &model)
-        .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q }, &mut fast)
+        .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &colour }, &mut fast)
         .expect("no singularity");
 
     // The definition at a state where coordinate (b, c) of x (or v) carries the derivative.
@@ -139,6 +141,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
                     v: std::array::from_fn(|k| Dual { v: v[i][k], d: seed(k, true) }),
                     m: Dual { v: m[i], d: 0.0 },
                     q: Dual { v: q[i], d: 0.0 },
+                    colour: colour[i].map(|c| Dual { v: c, d: 0.0 }),
                 }
             })
             .collect();
@@ -154,6 +157,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
                 v: std::array::from_fn(|k| Dual { v: vel(i, k), d: 0.0 }),
                 m: Dual { v: m[i], d: 0.0 },
                 q: Dual { v: q[i], d: 0.0 },
+                colour: colour[i].map(|c| Dual { v: c, d: 0.0 }),
             })
             .collect();
         let p: Vec<Dual> = params.iter().map(|&c| Dual { v: c, d: 0.0 }).collect();
@@ -194,7 +198,8 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         "{kind:?} energy: fast {energy} vs definition {v_def}"
     );
     // a dissipative term's power is v·∂F/∂v
-    let sites: Vec<Site<f64>> = (0..n).map(|i| Site { x: x[i], v: v[i], m: m[i], q: q[i] }).collect();
+    let sites: Vec<Site<f64>> =
+        (0..n).map(|i| Site { x: x[i], v: v[i], m: m[i], q: q[i], colour: colour[i] }).collect();
     let refs: Vec<&Site<f64>> = sites.iter().collect();
     if let Some(power) = kind.power(params, &refs) {
         let euler: f64 = (0..n)

@@ -91,12 +91,10 @@ impl<T: Paired + Send + Sync> Force for Pairs<T> {
         for i in 0..s.x.len() {
             for j in i + 1..s.x.len() {
                 let d = Cell::image(&self.cell, sub(&s.x[j], &s.x[i]));
+                let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
                 for p in self.rows.iter() {
-                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]]).map_err(|what| Singularity {
-                        term: self.name,
-                        bodies: vec![i, j],
-                        what,
-                    })?;
+                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
                     // applied so that the two are exactly opposite
                     for c in 0..3 {
                         f[i][c] += a[c];

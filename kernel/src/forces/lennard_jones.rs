@@ -33,13 +33,13 @@ pub struct Shifted;
 pub struct ForceShifted;
 
 impl Paired for Plain {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         cut(d, p[2], |r2| lj(p[0], p[1], r2))
     }
 }
 
 impl Paired for Shifted {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         let vc = lj(p[0], p[1], p[2] * p[2]).0;
         cut(d, p[2], |r2| {
             let (v, s) = lj(p[0], p[1], r2);
@@ -49,7 +49,7 @@ impl Paired for Shifted {
 }
 
 impl Paired for ForceShifted {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         let rc = p[2];
         let (vc, sc) = lj(p[0], p[1], rc * rc);
         let slope = sc * rc; // V′(r_c)
@@ -87,9 +87,9 @@ mod tests {
         use super::{ForceShifted, Shifted};
         use crate::forces::Paired;
         let just_inside = [2.5f64.next_down(), 0.0, 0.0];
-        let (f, v) = Shifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4]).unwrap();
+        let (f, v) = Shifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4], 0.0).unwrap();
         assert!(v.abs() < 1e-15 && f[0].abs() > 1e-3, "energy continuous, force not: {v} {f:?}");
-        let (f, v) = ForceShifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4]).unwrap();
+        let (f, v) = ForceShifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4], 0.0).unwrap();
         assert!(v.abs() < 1e-15 && f[0].abs() < 1e-13, "both continuous: {v} {f:?}");
     }
 }

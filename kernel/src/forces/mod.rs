@@ -23,6 +23,7 @@ mod lennard_jones;
 mod magnetic_field;
 mod morse_bond;
 mod nuclear_yukawa;
+mod qcd_coulomb;
 mod uniform_acceleration;
 mod wca;
 mod yukawa;
@@ -57,6 +58,7 @@ pub struct Frame<'a> {
     pub v: &'a [[f64; 3]],
     pub m: &'a [f64],
     pub q: &'a [f64],
+    pub c: &'a [[f64; 2]],
 }
 
 /// A homogeneous group of term instances.
@@ -76,9 +78,10 @@ pub trait Bonded<const N: usize> {
 }
 
 /// The force on body i and the energy of one pair, given the displacement d = x_j − x_i
-/// (the minimum image in a periodic box); body j feels the opposite force.
+/// (the minimum image in a periodic box), the masses and charges [mᵢ, mⱼ, qᵢ, qⱼ] and the
+/// product of the colour charges cᵢ·cⱼ; body j feels the opposite force.
 pub trait Paired {
-    fn eval(p: &[f64], d: [f64; 3], mq: [f64; 4]) -> Result<([f64; 3], f64), &'static str>;
+    fn eval(p: &[f64], d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str>;
 }
 
 /// The force on one body and its energy, from its position, velocity, mass and charge.
@@ -107,6 +110,7 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::CoulombReactionField => Pairs::<coulomb_reaction_field::Fast>::boxed(kind, t, m),
         Kind::Yukawa => Pairs::<yukawa::Fast>::boxed(kind, t, m),
         Kind::NuclearYukawa => Pairs::<nuclear_yukawa::Fast>::boxed(kind, t, m),
+        Kind::QcdCoulomb => Pairs::<qcd_coulomb::Fast>::boxed(kind, t, m),
         Kind::UniformAcceleration => Fields::<uniform_acceleration::Fast>::boxed(kind, t),
         Kind::GravityWell => Fields::<gravity_well::Fast>::boxed(kind, t),
         Kind::HarmonicTrap => Fields::<harmonic_trap::Fast>::boxed(kind, t),

@@ -6,7 +6,7 @@ use super::Paired;
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         screened(-p[0], p[1], d)
     }
 }

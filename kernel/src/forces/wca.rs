@@ -7,7 +7,7 @@ use lagra_checker::terms::wca::MINIMUM;
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         cut(d, MINIMUM * p[1], |r2| {
             let (v, s) = lj(p[0], p[1], r2);
             (v + p[0], s)

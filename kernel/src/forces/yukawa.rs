@@ -5,7 +5,7 @@ use super::{central, Paired};
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4]) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         screened(p[0] * qi * qj, p[1], d)
     }
 }

@@ -15,7 +15,18 @@ use std::collections::HashMap;
 
 /// Types every scene knows without declaring them: display sizes only.
 const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
-const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "size"];
+const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "colour", "size"];
+
+/// The colour charges, weights of SU(3)'s fundamental representation (|c|² = 1/3), and the
+/// antiquarks' negatives.
+const COLOURS: &[(&str, [f64; 2])] = &[
+    ("red", [0.5, 0.288_675_134_594_812_9]),
+    ("green", [-0.5, 0.288_675_134_594_812_9]),
+    ("blue", [0.0, -0.577_350_269_189_625_8]),
+    ("antired", [-0.5, -0.288_675_134_594_812_9]),
+    ("antigreen", [0.5, -0.288_675_134_594_812_9]),
+    ("antiblue", [0.0, 0.577_350_269_189_625_8]),
+];
 /// Run length when the solver gives neither `steps` nor `duration`.
 pub const DEFAULT_STEPS: u64 = 5000;
 
@@ -255,10 +266,23 @@ impl<'a> Compiler<'a> {
             Some(f) => self.rd.numbers(&f, "entity", Dim::CHARGE, 1)?[0],
             None => 0.0,
         };
+        let colour = match field("colour") {
+            None => [0.0; 2],
+            Some(f) => {
+                let (name, at) = word(&f, "entity")?;
+                match COLOURS.iter().find(|c| c.0 == name) {
+                    Some(c) => c.1,
+                    None => {
+                        let known: Vec<&str> = COLOURS.iter().map(|c| c.0).collect();
+                        return err(at, format!("unknown colour `{name}`; known: {}", known.join(", ")));
+                    }
+                }
+            }
+        };
         if let Some(f) = field("size") {
             size = Some(self.rd.positive(&f, "entity", Dim::LENGTH)?);
         }
-        self.bodies.push(Body { mass, charge });
+        self.bodies.push(Body { mass, charge, colour });
         self.x0.push(x);
         self.v0.push(v);
         self.sizes.push(size.unwrap_or(0.0));

@@ -74,7 +74,10 @@ mod tests {
         let model = Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0 }, Body { mass: 3.0, charge: 0.0 }],
+            bodies: vec![
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 3.0, charge: 0.0, colour: [0.0; 2] },
+            ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
         };
         let s =
