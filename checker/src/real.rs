@@ -44,33 +44,28 @@ pub fn select<R: Real>(cond: Option<bool>, yes: impl FnOnce() -> R, no: impl FnO
     }
 }
 
+/// The methods a type already has under the same name and signature.
+macro_rules! same_named {
+    ($t:ty: $($unary:ident),*) => {
+        $(fn $unary(self) -> Self {
+            <$t>::$unary(self)
+        })*
+        fn powi(self, n: i32) -> Self {
+            <$t>::powi(self, n)
+        }
+        fn atan2(self, x: Self) -> Self {
+            <$t>::atan2(self, x)
+        }
+    };
+}
+
 impl Real for f64 {
+    same_named!(f64: sqrt, exp, ln, cos, sin);
     fn lift(&self, c: f64) -> Self {
         c
     }
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    fn powi(self, n: i32) -> Self {
-        f64::powi(self, n)
-    }
-    fn exp(self) -> Self {
-        f64::exp(self)
-    }
-    fn ln(self) -> Self {
-        f64::ln(self)
-    }
     fn acos(self) -> Self {
         f64::acos(self.clamp(-1.0, 1.0))
-    }
-    fn cos(self) -> Self {
-        f64::cos(self)
-    }
-    fn sin(self) -> Self {
-        f64::sin(self)
-    }
-    fn atan2(self, x: Self) -> Self {
-        f64::atan2(self, x)
     }
     fn lt(&self, bound: &Self) -> Option<bool> {
         (!self.is_nan() && !bound.is_nan()).then(|| self < bound)
@@ -81,32 +76,9 @@ impl Real for f64 {
 }
 
 impl Real for Interval {
+    same_named!(Interval: sqrt, exp, ln, acos, cos, sin);
     fn lift(&self, c: f64) -> Self {
         point(c)
-    }
-    fn sqrt(self) -> Self {
-        Interval::sqrt(self)
-    }
-    fn powi(self, n: i32) -> Self {
-        Interval::powi(self, n)
-    }
-    fn exp(self) -> Self {
-        Interval::exp(self)
-    }
-    fn ln(self) -> Self {
-        Interval::ln(self)
-    }
-    fn acos(self) -> Self {
-        Interval::acos(self)
-    }
-    fn cos(self) -> Self {
-        Interval::cos(self)
-    }
-    fn sin(self) -> Self {
-        Interval::sin(self)
-    }
-    fn atan2(self, x: Self) -> Self {
-        Interval::atan2(self, x)
     }
     fn lt(&self, bound: &Self) -> Option<bool> {
         if self.is_empty() || bound.is_empty() {

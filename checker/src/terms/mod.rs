@@ -178,8 +178,9 @@ impl Kind {
     }
 
     /// The definition evaluated over dimensions: parameters carry their declared dimension,
-    /// sites carry L, L·T⁻¹, M, Q. Returns (potential, dissipation function, dissipated power).
-    fn dimensions(self) -> (Dimension, Option<Dimension>, Option<Dimension>) {
+    /// sites carry L, L·T⁻¹, M, Q. Returns the potential and, where the term has them, the
+    /// dissipation function, the dissipated power and the velocity-dependent Lagrangian.
+    fn dimensions(self) -> [Option<Dimension>; 4] {
         let spec = self.spec();
         let p: Vec<Dimension> =
             spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
@@ -191,44 +192,31 @@ impl Kind {
             colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
         };
         let s = vec![&site; spec.shape.arity()];
-        (self.potential(&p, &s), self.rayleigh(&p, &s), self.power(&p, &s))
-    }
-
-    fn gyroscopic_dimension(self) -> Option<Dimension> {
-        let p: Vec<Dimension> =
-            self.spec().params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
-        let site = Site {
-            x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
-            v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
-            m: Dimension::of(Dim::MASS),
-            q: Dimension::of(Dim::CHARGE),
-            colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
-        };
-        self.gyroscopic(&p, &vec![&site; self.spec().shape.arity()])
+        [Some(self.potential(&p, &s)), self.rayleigh(&p, &s), self.power(&p, &s), self.gyroscopic(&p, &s)]
     }
 
     /// Whether the definition has a dissipation function (worked out once per kind).
     pub fn dissipative(self) -> bool {
         static TABLE: OnceLock<Vec<bool>> = OnceLock::new();
-        TABLE.get_or_init(|| Kind::ALL.iter().map(|k| k.dimensions().1.is_some()).collect())[self as usize]
+        TABLE.get_or_init(|| Kind::ALL.iter().map(|k| k.dimensions()[1].is_some()).collect())[self as usize]
     }
 
     /// Proves the definition homogeneous: its potential is an energy and its dissipation
     /// function (if any) a power, with no sum of unlike dimensions on the way.
     pub fn check_dimensions(self) -> Result<(), String> {
-        let (v, f, w) = self.dimensions();
-        let expect = |what: &str, got: Dimension, want: Dim| match got.0 {
-            Ok(d) if d == want => Ok(()),
-            Ok(d) => Err(format!("{}: {what} has dimension {d}, not {want}", self.name())),
-            Err(e) => Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
-        };
-        expect("potential", v, Dim::ENERGY)?;
-        if let Some(g) = self.gyroscopic_dimension() {
-            expect("velocity-dependent Lagrangian", g, Dim::ENERGY)?;
-        }
-        for (what, d) in [("dissipation function", f), ("dissipated power", w)] {
-            if let Some(d) = d {
-                expect(what, d, Dim::ENERGY / Dim::TIME)?;
+        let power = Dim::ENERGY / Dim::TIME;
+        let wanted = [
+            ("potential", Dim::ENERGY),
+            ("dissipation function", power),
+            ("dissipated power", power),
+            ("velocity-dependent Lagrangian", Dim::ENERGY),
+        ];
+        for ((what, want), got) in wanted.into_iter().zip(self.dimensions()) {
+            match got.map(|g| g.0) {
+                None => {}
+                Some(Ok(d)) if d == want => {}
+                Some(Ok(d)) => return Err(format!("{}: {what} has dimension {d}, not {want}", self.name())),
+                Some(Err(e)) => return Err(format!("{}: {what} is inhomogeneous ({e})", self.name())),
             }
         }
         Ok(())
