@@ -96,8 +96,9 @@ def lj_liquid():
     basis = [[0, 0, 0], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]]
     xs = [[(i + b[0]) * a, (j + b[1]) * a, (k + b[2]) * a] for i in range(cells) for j in range(cells) for k in range(cells) for b in basis]
     masses = [1.0] * len(xs)
-    # uniform, not Maxwell-Boltzmann: the dynamics must make the distribution Gaussian
-    vels = scale_to(zero_momentum([[rng.uniform(-1, 1) for _ in range(3)] for _ in xs], masses), masses, 1.44)
+    # uniform, not Maxwell-Boltzmann, and twice as fast along x: the dynamics must make the
+    # distribution Gaussian and share the energy equally between the axes
+    vels = scale_to(zero_momentum([[2 * rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)] for _ in xs], masses), masses, 1.44)
     side = cells * a
     lines = [
         "scene lj_liquid {",
@@ -113,6 +114,7 @@ def lj_liquid():
         "  @expect momentum_conservation { every: 20 }",
         "  @expect dimensional_consistency",
         "  @predict maxwell_boltzmann { tol: 0.01 }",
+        "  @predict equipartition { tol: 0.05 }",
         "  solver { dt: 0.005, steps: 3000, steps_per_frame: 100 }",
     ]
     write("lj_liquid", "// A Lennard-Jones liquid near the triple point (reduced units).\n", lines)
