@@ -23,6 +23,9 @@ pub enum PredictionKind {
     Virial,
     /// A charge in a uniform magnetic field alone: T = 2π m / (|q| |B|), the cyclotron period.
     CyclotronPeriod,
+    /// The same: the gyration radius m v⊥ / (|q| |B|), measured as half the extent of the orbit
+    /// across the field once it has turned fully.
+    CyclotronRadius,
     /// Statistical: at the end of the run the velocity components, relative to the centre of
     /// mass and scaled by √(m/T) at the measured kinetic temperature T, pass a Kolmogorov–Smirnov
     /// test against the standard normal distribution (p ≥ tol, 0.01 if not given).
@@ -40,7 +43,8 @@ pub struct Prediction {
 }
 
 impl PredictionKind {
-    pub const ALL: [PredictionKind; 6] = [
+    pub const ALL: [PredictionKind; 7] = [
+        PredictionKind::CyclotronRadius,
         PredictionKind::OscillatorPeriod,
         PredictionKind::KeplerPeriod,
         PredictionKind::Virial,
@@ -56,6 +60,7 @@ impl PredictionKind {
             PredictionKind::Virial => "virial",
             PredictionKind::Equipartition => "equipartition",
             PredictionKind::CyclotronPeriod => "cyclotron_period",
+            PredictionKind::CyclotronRadius => "cyclotron_radius",
             PredictionKind::MaxwellBoltzmann => "maxwell_boltzmann",
         }
     }
@@ -114,7 +119,7 @@ impl PredictionKind {
             PredictionKind::Virial => Ok(Some(1.0)),
             PredictionKind::Equipartition if model.bodies.len() < 10 => Err("needs at least 10 bodies".into()),
             PredictionKind::Equipartition => Ok(Some(1.0)),
-            PredictionKind::CyclotronPeriod => {
+            PredictionKind::CyclotronPeriod | PredictionKind::CyclotronRadius => {
                 let (b, body) = match (model.terms.as_slice(), model.bodies.as_slice()) {
                     ([t], [body]) if t.kind == Kind::MagneticField => {
                         (Vector3::new(t.params[0], t.params[1], t.params[2]), body)
@@ -124,7 +129,10 @@ impl PredictionKind {
                 if body.charge == 0.0 || b.norm() == 0.0 {
                     return Err("the body is neutral or the field is zero: it does not gyrate".into());
                 }
-                Ok(Some(TAU * body.mass / (body.charge.abs() * b.norm())))
+                let omega = body.charge.abs() * b.norm() / body.mass;
+                let v = Vector3::from(v0[0]);
+                let across = (v - b * (v.dot(&b) / b.norm_squared())).norm();
+                Ok(Some(if self == PredictionKind::CyclotronPeriod { TAU / omega } else { across / omega }))
             }
             PredictionKind::MaxwellBoltzmann if model.bodies.len() < 10 => {
                 Err("needs at least 10 bodies for a distribution to test".into())
@@ -140,8 +148,9 @@ pub enum Meter {
     Crossings { i: usize, j: usize, r0: f64, last: Option<(f64, f64)>, first: Option<f64>, latest: f64, count: u64 },
     /// Completed revolutions of the relative position in the orbital plane.
     Revolutions(Winding),
-    /// Completed turns of body 0's velocity about the magnetic field.
-    Gyrations { normal: Vector3<f64>, winding: Winding },
+    /// Completed turns of body 0's velocity about the magnetic field, and the extent of its
+    /// orbit across the field (the positions' least and greatest along a fixed in-plane axis).
+    Gyrations { normal: Vector3<f64>, winding: Winding, extent: (f64, f64), radius: bool },
     /// Kinetic energy along each axis, at every state of the run.
     Axes { masses: Vec<f64>, per_state: Vec<[f64; 3]> },
     /// Running sums of 2T and of −Σ x·F over the states of the run.
@@ -175,11 +184,17 @@ impl Meter {
                 virial: 0.0,
                 states: 0,
             },
-            PredictionKind::CyclotronPeriod => {
+            PredictionKind::CyclotronPeriod | PredictionKind::CyclotronRadius => {
                 let (t, q) = (&model.terms[0], model.bodies[0].charge);
                 // a positive charge turns clockwise about B
                 let normal = -Vector3::new(t.params[0], t.params[1], t.params[2]) * q.signum();
-                Meter::Gyrations { normal, winding: Winding::default() }
+                let radius = p.kind == PredictionKind::CyclotronRadius;
+                Meter::Gyrations {
+                    normal,
+                    winding: Winding::default(),
+                    extent: (f64::INFINITY, f64::NEG_INFINITY),
+                    radius,
+                }
             }
             PredictionKind::MaxwellBoltzmann => {
                 Meter::Velocities { first: None, last: vec![], masses: model.bodies.iter().map(|b| b.mass).collect() }
@@ -226,7 +241,13 @@ impl Meter {
                 let n = r.cross(&(Vector3::from(v[1]) - Vector3::from(v[0])));
                 w.push(t, r, n);
             }
-            Meter::Gyrations { normal, winding } => winding.push(t, Vector3::from(v[0]), *normal),
+            Meter::Gyrations { normal, winding, extent, .. } => {
+                winding.push(t, Vector3::from(v[0]), *normal);
+                if let Some((e1, _)) = winding.basis {
+                    let along = Vector3::from(x[0]).dot(&e1);
+                    *extent = (extent.0.min(along), extent.1.max(along));
+                }
+            }
         }
     }
 
@@ -251,6 +272,9 @@ impl Meter {
         match self {
             Meter::Crossings { first, latest, count, .. } if *count >= 2 => {
                 Some((latest - first.unwrap_or(0.0)) / (*count - 1) as f64)
+            }
+            Meter::Gyrations { winding, extent, radius: true, .. } => {
+                winding.period().map(|_| (extent.1 - extent.0) / 2.0)
             }
             Meter::Revolutions(w) | Meter::Gyrations { winding: w, .. } => w.period(),
             Meter::Virial { kinetic, virial, states, .. } if *states > 1 => Some(kinetic / virial),
