@@ -187,7 +187,8 @@ fn coordinates_that_overflow_halt_the_run_never_pass() {
     let out = stdout(&o);
     assert_eq!(o.status.code(), Some(1), "{out}");
     assert!(!out.contains("PASS"), "{out}");
-    assert!(out.contains("non-finite"), "{out}");
+    // halted with a named cause: the force overflows at the start, or a state turns non-finite
+    assert!(out.contains("overflows binary64") || out.contains("non-finite"), "{out}");
 }
 
 #[test]

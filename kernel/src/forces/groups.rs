@@ -5,6 +5,34 @@ use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::Kind;
 use std::marker::PhantomData;
 
+/// A term's result must be finite: where its formula overflows binary64 (bodies closer than its
+/// singularity allows) that is a clear error, never a NaN handed to the solver.
+trait Finite: Sized {
+    fn finite(self) -> Result<Self, &'static str>;
+}
+
+const OVERFLOW: &str = "so close to a singular configuration that the force overflows binary64";
+
+impl<const N: usize> Finite for ([[f64; 3]; N], f64) {
+    fn finite(self) -> Result<Self, &'static str> {
+        if self.1.is_finite() && self.0.iter().flatten().all(|c| c.is_finite()) {
+            Ok(self)
+        } else {
+            Err(OVERFLOW)
+        }
+    }
+}
+
+impl Finite for ([f64; 3], f64) {
+    fn finite(self) -> Result<Self, &'static str> {
+        if self.1.is_finite() && self.0.iter().all(|c| c.is_finite()) {
+            Ok(self)
+        } else {
+            Err(OVERFLOW)
+        }
+    }
+}
+
 /// Each instance's parameters, flattened: row k is `params[k*w .. (k+1)*w]`.
 struct Rows {
     params: Vec<f64>,
@@ -53,7 +81,7 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
                 [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
             });
             let v: [[f64; 3]; N] = std::array::from_fn(|i| s.v[b[i]]);
-            let (fs, e) = T::eval(self.rows.row(k), &x, &v).map_err(|what| Singularity {
+            let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(Finite::finite).map_err(|what| Singularity {
                 term: self.name,
                 bodies: b.to_vec(),
                 what,
@@ -94,6 +122,7 @@ impl<T: Paired + Send + Sync> Force for Pairs<T> {
                 let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
                 for p in self.rows.iter() {
                     let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
+                        .and_then(Finite::finite)
                         .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
                     // applied so that the two are exactly opposite
                     for c in 0..3 {
@@ -134,11 +163,9 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
         let mut energy = 0.0;
         for (p, on) in self.rows.iter().zip(&self.on) {
             let mut one = |i: usize| -> Result<(), Singularity> {
-                let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i]).map_err(|what| Singularity {
-                    term: self.name,
-                    bodies: vec![i],
-                    what,
-                })?;
+                let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i])
+                    .and_then(Finite::finite)
+                    .map_err(|what| Singularity { term: self.name, bodies: vec![i], what })?;
                 for c in 0..3 {
                     f[i][c] += a[c];
                 }
