@@ -259,3 +259,22 @@ fn the_language_reference_lists_the_vocabulary_as_it_is() {
     let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/language.md")).unwrap();
     assert!(doc.contains(&table), "docs/language.md is out of date: paste the output of `lagra terms`");
 }
+
+/// Every integrator runs the Kepler orbit and passes its claims; at the same dt the fourth-order
+/// ones measure the period far more accurately than Verlet.
+#[test]
+fn fourth_order_integrators_beat_verlet_at_equal_dt() {
+    let dir = tempfile::tempdir().unwrap();
+    let kepler = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/kepler.lagra")).unwrap();
+    let period_error = |integrator: &str| {
+        let p = scene(dir.path(), &format!("{integrator}.lagra"), &kepler.replace("velocity_verlet", integrator));
+        let (o, v) = json(&[p.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{integrator}: {v}");
+        v["predictions"][0]["rel_diff"].as_f64().unwrap()
+    };
+    let verlet = period_error("velocity_verlet");
+    for integrator in ["yoshida4", "rk4"] {
+        let e = period_error(integrator);
+        assert!(e < verlet / 1000.0, "{integrator}: {e} against Verlet's {verlet}");
+    }
+}

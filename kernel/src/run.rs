@@ -5,7 +5,7 @@
 use crate::graph::LagrangianGraph;
 use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
-use crate::solvers::VelocityVerlet;
+use crate::solvers::Stepper;
 use crate::state::{kinetic, State};
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
@@ -98,24 +98,24 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // The checker's own test of a state (sizes, finiteness), for when no claim looks at it.
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
-    match VelocityVerlet::new(&graph, &state) {
+    match Stepper::new(scene.solver.integrator, &graph, &state) {
         Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
         Ok(mut solver) => {
             stop = check(&state)?;
-            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, &solver.f));
-            trace(&state, solver.potential)?;
+            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
+            trace(&state, solver.potential())?;
             while stop.is_none() && state.step < steps {
                 if let Err(e) = solver.step(&graph, &mut state, dt) {
                     stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
                     break;
                 }
                 stop = check(&state)?;
-                if stop.is_none() && !solver.potential.is_finite() {
+                if stop.is_none() && !solver.potential().is_finite() {
                     stop = non_finite(&state);
                 }
-                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, &solver.f));
+                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                 if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
-                    trace(&state, solver.potential)?;
+                    trace(&state, solver.potential())?;
                 }
             }
             if stop.is_none() {
