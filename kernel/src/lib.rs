@@ -10,3 +10,4 @@ pub mod run;
 pub mod scene;
 pub mod solvers;
 pub mod state;
+pub mod traverse;

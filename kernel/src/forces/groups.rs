@@ -1,6 +1,7 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
 use super::{sub, Bonded, Field, Force, Frame, Paired, Singularity};
+use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::Kind;
 use std::marker::PhantomData;
@@ -104,35 +105,36 @@ pub struct Pairs<T> {
     name: &'static str,
     rows: Rows,
     cell: Option<Cell>,
+    /// The farthest any row reaches, if every row's reach is finite (then a cell list applies).
+    reach: Option<f64>,
     term: PhantomData<T>,
 }
 
 impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
-        Box::new(Pairs::<T> { name: kind.name(), rows: Rows::new(kind, t), cell: m.cell, term: PhantomData })
+        let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
+        Box::new(Pairs::<T> { name: kind.name(), rows: Rows::new(kind, t), cell: m.cell, reach, term: PhantomData })
     }
 }
 
 impl<T: Paired + Send + Sync> Force for Pairs<T> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let mut energy = 0.0;
-        for i in 0..s.x.len() {
-            for j in i + 1..s.x.len() {
-                let d = Cell::image(&self.cell, sub(&s.x[j], &s.x[i]));
-                let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
-                for p in self.rows.iter() {
-                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
-                        .and_then(Finite::finite)
-                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
-                    // applied so that the two are exactly opposite
-                    for c in 0..3 {
-                        f[i][c] += a[c];
-                        f[j][c] -= a[c];
-                    }
-                    energy += e;
+        traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
+            let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
+            for p in self.rows.iter() {
+                let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
+                    .and_then(Finite::finite)
+                    .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                // applied so that the two are exactly opposite
+                for c in 0..3 {
+                    f[i][c] += a[c];
+                    f[j][c] -= a[c];
                 }
+                energy += e;
             }
-        }
+            Ok(())
+        })?;
         Ok(energy)
     }
     fn velocity_dependent(&self) -> bool {
