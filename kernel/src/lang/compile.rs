@@ -28,7 +28,7 @@ const COLOURS: &[(&str, [f64; 2])] = &[
     ("antiblue", [0.0, 0.577_350_269_189_625_8]),
 ];
 /// Run length when the solver gives neither `steps` nor `duration`.
-pub const DEFAULT_STEPS: u64 = 5000;
+const DEFAULT_STEPS: u64 = 5000;
 
 fn err<T>(span: impl Into<Span>, msg: impl Into<String>) -> Result<T, Diagnostic> {
     Err(Diagnostic::new(span.into(), msg))

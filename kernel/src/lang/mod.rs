@@ -6,7 +6,6 @@ mod diagnostic;
 mod syntax;
 mod units;
 
-pub use compile::DEFAULT_STEPS;
 pub use diagnostic::{Diagnostic, Span};
 
 use crate::scene::Scene;

@@ -53,7 +53,7 @@ const WORDS: &[(&str, Dim, f64, i32)] = &[
     ("deg", Dim::NONE, std::f64::consts::PI / 180.0, 0),
 ];
 
-pub fn known_words() -> String {
+fn known_words() -> String {
     WORDS.iter().map(|w| w.0).collect::<Vec<_>>().join(", ")
 }
 
