@@ -4,6 +4,7 @@
 
 use crate::forces::{group, Force, Frame, Singularity};
 use crate::state::State;
+use crate::sum::Sum;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Kind;
 
@@ -42,10 +43,10 @@ impl LagrangianGraph {
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
         let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges, c: &self.colours };
-        let mut potential = 0.0;
+        let mut potential = Sum::default();
         for (_, g) in &self.groups {
-            potential += g.accumulate(&frame, f)?;
+            potential.add(g.accumulate(&frame, f)?);
         }
-        Ok(potential)
+        Ok(potential.value())
     }
 }

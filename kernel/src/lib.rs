@@ -10,4 +10,5 @@ pub mod run;
 pub mod scene;
 pub mod solvers;
 pub mod state;
+pub mod sum;
 pub mod traverse;

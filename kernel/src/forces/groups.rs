@@ -1,6 +1,7 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
 use super::{sub, Bonded, Field, Force, Frame, Paired, Singularity};
+use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::Kind;
@@ -73,7 +74,7 @@ impl<T: Bonded<N> + Send + Sync + 'static, const N: usize> Bonds<T, N> {
 
 impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
+        let mut energy = Sum::default();
         for (k, b) in self.sites.iter().enumerate() {
             // positions relative to the first body, by minimum image in a periodic cell
             let x0 = s.x[b[0]];
@@ -92,9 +93,9 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
                     f[*i][c] += fi[c];
                 }
             }
-            energy += e;
+            energy.add(e);
         }
-        Ok(energy)
+        Ok(energy.value())
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
@@ -119,7 +120,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
 
 impl<T: Paired + Send + Sync> Force for Pairs<T> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
+        let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
             for p in self.rows.iter() {
@@ -131,11 +132,11 @@ impl<T: Paired + Send + Sync> Force for Pairs<T> {
                     f[i][c] += a[c];
                     f[j][c] -= a[c];
                 }
-                energy += e;
+                energy.add(e);
             }
             Ok(())
         })?;
-        Ok(energy)
+        Ok(energy.value())
     }
     fn velocity_dependent(&self) -> bool {
         false
@@ -162,7 +163,7 @@ impl<T: Field + Send + Sync + 'static> Fields<T> {
 
 impl<T: Field + Send + Sync> Force for Fields<T> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        let mut energy = 0.0;
+        let mut energy = Sum::default();
         for (p, on) in self.rows.iter().zip(&self.on) {
             let mut one = |i: usize| -> Result<(), Singularity> {
                 let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i])
@@ -171,7 +172,7 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
                 for c in 0..3 {
                     f[i][c] += a[c];
                 }
-                energy += e;
+                energy.add(e);
                 Ok(())
             };
             if on.is_empty() {
@@ -180,7 +181,7 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
                 on.iter().try_for_each(|&i| one(i))?;
             }
         }
-        Ok(energy)
+        Ok(energy.value())
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
