@@ -39,6 +39,12 @@ pub struct Summary {
     pub wall_s: f64,
     pub steps_per_s: f64,
     pub ns_per_atom_step: f64,
+    pub threads: usize,
+    /// How each term group visited its bodies: `[kind, plan]`.
+    pub plan: Vec<(&'static str, String)>,
+    /// Print the plan in the text report too (`--explain`).
+    #[serde(skip)]
+    explain: bool,
     pub claims: Vec<ClaimLine>,
     pub predictions: Vec<Measured>,
     /// Why the run stopped early, if it did.
@@ -47,7 +53,7 @@ pub struct Summary {
 }
 
 impl Summary {
-    pub fn new(file: &str, scene: &Scene, r: &Report) -> Summary {
+    pub fn new(file: &str, scene: &Scene, r: &Report, threads: usize, explain: bool) -> Summary {
         let mut terms: Vec<TermCount> = vec![];
         for t in &scene.model.terms {
             match terms.iter_mut().find(|c| c.kind == t.kind.name()) {
@@ -84,6 +90,9 @@ impl Summary {
             wall_s: r.wall_s,
             steps_per_s: r.steps as f64 / r.wall_s,
             ns_per_atom_step: r.wall_s * 1e9 / atom_steps,
+            threads,
+            plan: r.plan.iter().map(|(k, p)| (k.name(), p.clone())).collect(),
+            explain,
             claims,
             predictions: r.predictions.clone(),
             halted,
@@ -104,7 +113,20 @@ impl Summary {
         let _ = writeln!(s, "bodies      {}", self.bodies);
         let _ = writeln!(s, "terms       {terms}");
         let _ = writeln!(s, "integrator  {}, dt {}{}, {} steps", self.integrator, self.dt, self.time_unit, self.steps);
-        let _ = writeln!(s, "wall        {:.3} s ({:.0} steps/s)", self.wall_s, self.steps_per_s);
+        let _ = writeln!(
+            s,
+            "wall        {:.3} s ({:.0} steps/s, {:.1} ns/atom-step, {} thread{})",
+            self.wall_s,
+            self.steps_per_s,
+            self.ns_per_atom_step,
+            self.threads,
+            if self.threads == 1 { "" } else { "s" }
+        );
+        if self.explain {
+            for (kind, plan) in &self.plan {
+                let _ = writeln!(s, "plan        {kind}: {plan}");
+            }
+        }
         for c in &self.claims {
             let _ = writeln!(s, "{}", c.line);
         }

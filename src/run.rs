@@ -33,6 +33,13 @@ pub struct Args {
     /// Run this many steps instead of the scene's own run length.
     #[arg(long, value_name = "N")]
     steps: Option<u64>,
+    /// Threads for the forces. Any count gives the same bits; more help only on thousands of
+    /// bodies with pair terms.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    threads: usize,
+    /// Print how each term group visits its bodies (every pair, cell list, Verlet list, chunks).
+    #[arg(long)]
+    explain: bool,
 }
 
 /// Bad input: the message on stderr, exit code 2.
@@ -57,6 +64,9 @@ pub fn main(a: Args) -> ExitCode {
     if a.steps == Some(0) {
         return bad("--steps must be at least 1");
     }
+    if a.threads == 0 {
+        return bad("--threads must be at least 1");
+    }
     let mut trace = match a.trace.as_ref().map(File::create).transpose() {
         Ok(f) => f.map(BufWriter::new),
         Err(e) => return bad(format!("cannot create the trace file: {e}")),
@@ -77,6 +87,7 @@ pub fn main(a: Args) -> ExitCode {
             steps: a.steps,
             trace: trace.as_mut().map(|w| w as &mut dyn Write),
             record: a.states.is_some().then_some(&mut record),
+            threads: a.threads,
         },
     );
     let flushed = trace.map(|mut t| t.flush()).transpose();
@@ -89,7 +100,7 @@ pub fn main(a: Args) -> ExitCode {
         Ok(sum) => sum.map(label),
         Err(e) => return bad(format!("writing the state file: {e}")),
     };
-    let summary = report::Summary::new(&path, &scene, &rep);
+    let summary = report::Summary::new(&path, &scene, &rep, a.threads, a.explain);
     if let Some(c) = &a.certificate {
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {

@@ -278,3 +278,33 @@ fn fourth_order_integrators_beat_verlet_at_equal_dt() {
         assert!(e < verlet / 1000.0, "{integrator}: {e} against Verlet's {verlet}");
     }
 }
+
+/// `--threads` changes nothing but the speed: the trace is the same bytes, and `--explain`
+/// names the plan the planner chose.
+#[test]
+fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(
+        dir.path(),
+        "melt.lagra",
+        "scene melt { entity atom { mass: 1 }
+           lattice { type: atom, density: 0.8442, cells: [11, 11, 11], temperature: 1.44, seed: 3 }
+           interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+           @expect momentum_conservation { every: 5 }
+           solver { dt: 0.005, steps: 10, steps_per_frame: 5 } }",
+    );
+    let scene = scene.to_str().unwrap();
+    let mut traces = vec![];
+    for threads in ["1", "2"] {
+        let trace = dir.path().join(format!("t{threads}.jsonl"));
+        let o = lagra(&["run", scene, "--threads", threads, "--explain", "--trace", trace.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+        assert!(stdout(&o).contains("plan        LennardJonesShifted: Verlet list"), "{}", stdout(&o));
+        assert!(stdout(&o).contains("4 fixed chunks"), "{}", stdout(&o));
+        traces.push(std::fs::read(trace).unwrap());
+    }
+    assert!(traces[0].len() > 100_000);
+    assert!(traces[0] == traces[1], "the trajectories differ between 1 and 2 threads");
+    let o = lagra(&["run", scene, "--threads", "0"]);
+    assert_eq!((o.status.code(), stderr(&o).trim()), (Some(2), "lagra: --threads must be at least 1"));
+}

@@ -5,6 +5,7 @@
 pub mod forces;
 pub mod graph;
 pub mod lang;
+pub mod neighbours;
 pub mod predict;
 pub mod run;
 pub mod scene;

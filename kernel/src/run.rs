@@ -9,6 +9,7 @@ use crate::solvers::Stepper;
 use crate::state::{kinetic, State};
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
+use lagra_checker::terms::Kind;
 use serde::Serialize;
 use std::io::Write;
 use std::time::Instant;
@@ -44,6 +45,8 @@ pub struct Report {
     pub outcome: Outcome,
     pub predictions: Vec<Measured>,
     pub state: State,
+    /// How each term group visited its bodies (with the neighbour-list builds, after the run).
+    pub plan: Vec<(Kind, String)>,
 }
 
 /// Keeps the states a run produces (the state file's writer).
@@ -56,6 +59,8 @@ pub struct Options<'a> {
     pub trace: Option<&'a mut dyn Write>,
     /// Called with every state the checker is shown (step 0 included), to keep them.
     pub record: Option<Recorder<'a>>,
+    /// Threads for the forces (the results are the same bits for any count).
+    pub threads: usize,
 }
 
 #[derive(Serialize)]
@@ -71,7 +76,7 @@ struct TraceLine<'a> {
 pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);
     let dt = scene.solver.dt;
-    let graph = LagrangianGraph::new(&scene.model);
+    let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
     let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
     let mut state = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
     let mut meters: Vec<(Meter, &Prediction)> =
@@ -141,5 +146,15 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees, detail }
         })
         .collect();
-    Ok(Report { planned_steps: steps, steps: state.step, wall_s, stop, outcome: monitor.finish(), predictions, state })
+    let plan = graph.plan();
+    Ok(Report {
+        planned_steps: steps,
+        steps: state.step,
+        wall_s,
+        stop,
+        outcome: monitor.finish(),
+        predictions,
+        state,
+        plan,
+    })
 }

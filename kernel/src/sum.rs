@@ -16,6 +16,12 @@ impl Sum {
         self.sum = t;
     }
 
+    /// Adds another running sum, its carry included.
+    pub fn merge(&mut self, other: Sum) {
+        self.add(other.sum);
+        self.carry += other.carry;
+    }
+
     pub fn value(self) -> f64 {
         self.sum + self.carry
     }

@@ -29,21 +29,21 @@ pub fn pairs<E>(
         }
         return Ok(());
     };
-    let (order, start) = grid.bin(x);
-    let members = |c: usize| &order[start[c]..start[c + 1]];
-    for c in 0..grid.cells() {
-        for (k, n) in grid.half_shell(c).into_iter().enumerate() {
-            let Some(n) = n else { continue };
-            for (a, &i) in members(c).iter().enumerate() {
-                // in its own cell a body pairs with the ones after it; elsewhere with all
-                let others = if k == 0 { &members(c)[a + 1..] } else { members(n) };
-                for &j in others {
-                    visit(i, j, Cell::image(cell, sub(&x[j], &x[i])))?;
-                }
-            }
-        }
-    }
-    Ok(())
+    grid.each_pair(x, |i, j, _| visit(i, j, Cell::image(cell, sub(&x[j], &x[i]))))
+}
+
+/// For bodies already wrapped into the box (`[0, L]` along periodic axes): calls
+/// `visit(i, j, image)` for every pair in the same or adjacent cells of a grid at least `reach`
+/// wide, where `image` (0..27, axis x least significant, digit 0/1/2 for −L/0/+L) is the box
+/// shift to add to xⱼ − xᵢ. No division or rounding per pair: the shift is the neighbour cell's
+/// wrap. `false` if no grid fits (too few bodies or cells).
+pub fn binned(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64, mut visit: impl FnMut(usize, usize, u8)) -> bool {
+    let Some(grid) = Grid::new(x, cell, reach).filter(|_| x.len() >= CELL_LIST_FROM) else { return false };
+    grid.each_pair::<std::convert::Infallible>(x, |i, j, image| {
+        visit(i, j, image);
+        Ok(())
+    })
+    .is_ok()
 }
 
 /// A grid of cells at least `reach` wide over the bodies (over the box along periodic axes).
@@ -77,6 +77,25 @@ impl Grid {
             (g.lo[a], g.size[a]) = (lo, if cells >= 1.0 { extent / cells } else { extent.max(reach) });
         }
         (g.n.iter().product::<usize>() <= 4 * x.len()).then_some(g)
+    }
+
+    /// Each pair in the same or adjacent cells once, with the image index of its cell's wrap.
+    fn each_pair<E>(&self, x: &[[f64; 3]], mut visit: impl FnMut(usize, usize, u8) -> Result<(), E>) -> Result<(), E> {
+        let (order, start) = self.bin(x);
+        let members = |c: usize| &order[start[c]..start[c + 1]];
+        for c in 0..self.cells() {
+            for (k, n) in self.half_shell(c).into_iter().enumerate() {
+                let Some((n, image)) = n else { continue };
+                for (a, &i) in members(c).iter().enumerate() {
+                    // in its own cell a body pairs with the ones after it; elsewhere with all
+                    let others = if k == 0 { &members(c)[a + 1..] } else { members(n) };
+                    for &j in others {
+                        visit(i, j, image)?;
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     fn cells(&self) -> usize {
@@ -114,11 +133,12 @@ impl Grid {
         (order, start)
     }
 
-    /// The cell itself, then its 13 neighbours ahead of it (None beyond a closed edge).
-    fn half_shell(&self, c: usize) -> [Option<usize>; 14] {
+    /// The cell itself, then its 13 neighbours ahead of it (None beyond a closed edge), each
+    /// with the image index of the box shift its wrap implies.
+    fn half_shell(&self, c: usize) -> [Option<(usize, u8)>; 14] {
         let at = [c / (self.n[1] * self.n[2]), (c / self.n[2]) % self.n[1], c % self.n[2]];
         let mut out = [None; 14];
-        out[0] = Some(c);
+        out[0] = Some((c, 13));
         let mut k = 1;
         for d in [-1i64, 0, 1]
             .iter()
@@ -130,9 +150,12 @@ impl Grid {
             }
             let mut m = [0usize; 3];
             let mut inside = true;
-            for a in 0..3 {
+            let mut image = 0u8;
+            for a in (0..3).rev() {
                 let v = at[a] as i64 + d[a];
                 let n = self.n[a] as i64;
+                // past the last cell the neighbour is the first one, one box length on
+                image = 3 * image + (1 + v.div_euclid(n)) as u8;
                 if self.periodic[a] {
                     m[a] = v.rem_euclid(n) as usize;
                 } else if (0..n).contains(&v) {
@@ -141,7 +164,7 @@ impl Grid {
                     inside = false;
                 }
             }
-            out[k] = inside.then(|| self.index(m));
+            out[k] = inside.then(|| (self.index(m), image));
             k += 1;
         }
         out

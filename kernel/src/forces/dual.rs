@@ -121,7 +121,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     let model = Model { units: UnitSystem::Reduced, cell: None, bodies, terms: vec![term.clone()] };
 
     let mut fast = vec![[0.0; 3]; n];
-    let energy = group(kind, &[&term], &model)
+    let energy = group(kind, &[&term], &model, &None)
         .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &colour }, &mut fast)
         .expect("no singularity");
 

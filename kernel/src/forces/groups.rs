@@ -1,11 +1,15 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
-use super::{sub, Bonded, Field, Force, Frame, Paired, Singularity};
+use super::{sub, Bonded, Field, Force, Frame, Paired, Pool, Singularity};
+use crate::neighbours::Neighbours;
 use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::Kind;
+use rayon::prelude::*;
 use std::marker::PhantomData;
+use std::ops::Range;
+use std::sync::Mutex;
 
 /// A term's result must be finite: where its formula overflows binary64 (bodies closer than its
 /// singularity allows) that is a clear error, never a NaN handed to the solver.
@@ -100,6 +104,9 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     fn velocity_dependent(&self) -> bool {
         self.velocity
     }
+    fn plan(&self) -> String {
+        format!("{} listed instance(s), in order", self.sites.len())
+    }
 }
 
 pub struct Pairs<T> {
@@ -108,18 +115,106 @@ pub struct Pairs<T> {
     cell: Option<Cell>,
     /// The farthest any row reaches, if every row's reach is finite (then a cell list applies).
     reach: Option<f64>,
+    /// For a finite reach on enough bodies in a big enough box: the Verlet list, kept between
+    /// steps (a lock, since forces are evaluated through a shared reference).
+    list: Option<Mutex<Neighbours>>,
+    pool: Pool,
     term: PhantomData<T>,
 }
 
-impl<T: Paired + Send + Sync + 'static> Pairs<T> {
-    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
-        let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
-        Box::new(Pairs::<T> { name: kind.name(), rows: Rows::new(kind, t), cell: m.cell, reach, term: PhantomData })
-    }
-}
+/// Below this many bodies a pair term loops over every pair: as fast, and nothing to keep.
+const LIST_FROM: usize = 64;
 
-impl<T: Paired + Send + Sync> Force for Pairs<T> {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+/// From this many bodies the listed pairs are split into `CHUNKS` parts by body, each summing
+/// its forces into its own buffer, the buffers then added in order: the same bits for any number
+/// of threads, since the split depends on the list alone.
+const SPLIT_FROM: usize = 4096;
+const CHUNKS: usize = 4;
+
+impl<T: Paired + Send + Sync + 'static> Pairs<T> {
+    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
+        let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
+        let list =
+            reach.filter(|_| m.bodies.len() >= LIST_FROM).and_then(|r| Neighbours::new(&m.cell, r)).map(Mutex::new);
+        let rows = Rows::new(kind, t);
+        Box::new(Pairs::<T> {
+            name: kind.name(),
+            rows,
+            cell: m.cell,
+            reach,
+            list,
+            pool: pool.clone(),
+            term: PhantomData,
+        })
+    }
+
+    /// The pairs of bodies `is` from the list: forces into `f`, the energy returned. Rows are the
+    /// outer loop so that each one's parameters stay in registers through the pair loop.
+    fn listed(&self, l: &Neighbours, s: &Frame, is: Range<usize>, f: &mut [[f64; 3]]) -> Result<Sum, Singularity> {
+        let x = &l.wrapped;
+        let mut energy = Sum::default();
+        for p in self.rows.iter() {
+            for i in is.clone() {
+                let xi = x[i];
+                let mut fi = [0.0; 3];
+                // plain within a body's few dozen pairs, compensated across bodies
+                let mut ei = 0.0;
+                let range = l.start[i]..l.start[i + 1];
+                for (&j, &k) in l.j[range.clone()].iter().zip(&l.image[range]) {
+                    let j = j as usize;
+                    let sh = &l.shifts[usize::from(k) & 31];
+                    let d = [x[j][0] - xi[0] + sh[0], x[j][1] - xi[1] + sh[1], x[j][2] - xi[2] + sh[2]];
+                    let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
+                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                    for c in 0..3 {
+                        fi[c] += a[c];
+                        f[j][c] -= a[c];
+                    }
+                    ei += e;
+                }
+                for c in 0..3 {
+                    f[i][c] += fi[c];
+                }
+                energy.add(ei);
+            }
+        }
+        Ok(energy)
+    }
+
+    /// Through the Verlet list, split by body into chunks of about equal pair counts.
+    fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let n = s.x.len();
+        let chunks = if n >= SPLIT_FROM { CHUNKS } else { 1 };
+        let total = l.pairs();
+        let bounds: Vec<usize> = (0..=chunks)
+            .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
+            .collect();
+        let mut buffers = vec![vec![[0.0; 3]; n]; chunks - 1];
+        let mut targets: Vec<&mut [[f64; 3]]> =
+            std::iter::once(&mut *f).chain(buffers.iter_mut().map(|b| b.as_mut_slice())).collect();
+        let work = |(c, t): (usize, &mut &mut [[f64; 3]])| self.listed(l, s, bounds[c]..bounds[c + 1], t);
+        let sums: Vec<Result<Sum, Singularity>> = match &self.pool {
+            Some(pool) if chunks > 1 => pool.install(|| targets.par_iter_mut().enumerate().map(work).collect()),
+            _ => targets.iter_mut().enumerate().map(work).collect(),
+        };
+        for b in &buffers {
+            for (fi, bi) in f.iter_mut().zip(b) {
+                for c in 0..3 {
+                    fi[c] += bi[c];
+                }
+            }
+        }
+        let mut energy = Sum::default();
+        for part in sums {
+            energy.merge(part?);
+        }
+        Ok(energy.value())
+    }
+
+    /// Every pair a traversal visits (all pairs, or a cell list rebuilt now), each result
+    /// checked finite as it comes.
+    fn traversed(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
@@ -138,8 +233,42 @@ impl<T: Paired + Send + Sync> Force for Pairs<T> {
         })?;
         Ok(energy.value())
     }
+}
+
+impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let Some(list) = &self.list else { return self.traversed(s, f) };
+        let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        l.update(s.x, &self.cell);
+        let energy = self.through_list(&l, s, f)?;
+        if energy.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
+            return Ok(energy);
+        }
+        // Rare: find the pair that overflowed, by the checked traversal.
+        let mut scratch = vec![[0.0; 3]; f.len()];
+        self.traversed(s, &mut scratch)?;
+        Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW })
+    }
     fn velocity_dependent(&self) -> bool {
         false
+    }
+    fn plan(&self) -> String {
+        let reach = self.reach.map_or("infinite reach".to_string(), |r| format!("reach {r}"));
+        match &self.list {
+            None if self.reach.is_none() => format!("every pair each step ({reach})"),
+            None => format!("every pair, through a cell list rebuilt each step when there are at least 64 bodies ({reach}; no Verlet list: too few bodies, or a box shorter than twice reach + skin)"),
+            Some(l) => {
+                let l = l.lock().unwrap_or_else(|p| p.into_inner());
+                let threads = self.pool.as_ref().map_or(1, |p| p.current_num_threads());
+                format!(
+                    "Verlet list, half (Newton's third law), {reach} + skin {:.3}, built from a cell list, {} builds, {} pairs; {} on {threads} thread(s)",
+                    l.skin,
+                    l.builds,
+                    l.pairs(),
+                    if l.start.len() > SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
+                )
+            }
+        }
     }
 }
 
@@ -185,5 +314,8 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
+    }
+    fn plan(&self) -> String {
+        format!("{} instance(s), each on its bodies in order", self.on.len())
     }
 }

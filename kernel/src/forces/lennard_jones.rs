@@ -6,12 +6,14 @@ use super::Paired;
 
 /// The plain term and its derivative at r²: (V, dV/dr / r).
 pub(crate) fn lj(eps: f64, sigma: f64, r2: f64) -> (f64, f64) {
-    let s2 = sigma * sigma / r2;
+    let inv = 1.0 / r2; // the one division
+    let s2 = sigma * sigma * inv;
     let s6 = s2 * s2 * s2;
-    (4.0 * eps * (s6 * s6 - s6), 24.0 * eps * (s6 - 2.0 * s6 * s6) / r2)
+    (4.0 * eps * (s6 * s6 - s6), 24.0 * eps * (s6 - 2.0 * s6 * s6) * inv)
 }
 
-/// Within the cutoff, `inside(r²)` gives (V, dV/dr / r); beyond, nothing.
+/// Within the cutoff, `inside(r²)` gives (V, dV/dr / r); beyond, nothing. (Computing both sides
+/// and selecting without a branch was measured slower on lj_32k.)
 pub(crate) fn cut(
     d: [f64; 3],
     rc: f64,

@@ -67,7 +67,13 @@ pub trait Force: Send + Sync {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity>;
     /// Whether the force depends on velocities (the solver then iterates its closing kick).
     fn velocity_dependent(&self) -> bool;
+    /// How the group visits its bodies, in a line (`lagra run --explain`).
+    fn plan(&self) -> String;
 }
+
+/// The threads a group may use: the run's own pool, never rayon's global one (`None`: one
+/// thread, no pool).
+pub type Pool = Option<std::sync::Arc<rayon::ThreadPool>>;
 
 /// Forces on N listed bodies, and the energy, of one instance with parameters `p`.
 pub trait Bonded<const N: usize> {
@@ -93,7 +99,7 @@ pub trait Field {
 }
 
 /// The group for all instances of one kind: one line per term kind.
-pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
+pub fn group(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
     match kind {
         Kind::HarmonicBond => Bonds::<harmonic_bond::Fast, 2>::boxed(kind, t, m),
         Kind::MorseBond => Bonds::<morse_bond::Fast, 2>::boxed(kind, t, m),
@@ -101,16 +107,16 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
         Kind::HarmonicAngle => Bonds::<harmonic_angle::Fast, 3>::boxed(kind, t, m),
         Kind::Dihedral => Bonds::<dihedral::Fast, 4>::boxed(kind, t, m),
         Kind::HydrogenBond => Bonds::<hydrogen_bond::Fast, 3>::boxed(kind, t, m),
-        Kind::Gravity => Pairs::<gravity::Fast>::boxed(kind, t, m),
-        Kind::LennardJones => Pairs::<lennard_jones::Plain>::boxed(kind, t, m),
-        Kind::LennardJonesShifted => Pairs::<lennard_jones::Shifted>::boxed(kind, t, m),
-        Kind::LennardJonesForceShifted => Pairs::<lennard_jones::ForceShifted>::boxed(kind, t, m),
-        Kind::Wca => Pairs::<wca::Fast>::boxed(kind, t, m),
-        Kind::Coulomb => Pairs::<coulomb::Fast>::boxed(kind, t, m),
-        Kind::CoulombReactionField => Pairs::<coulomb_reaction_field::Fast>::boxed(kind, t, m),
-        Kind::Yukawa => Pairs::<yukawa::Fast>::boxed(kind, t, m),
-        Kind::NuclearYukawa => Pairs::<nuclear_yukawa::Fast>::boxed(kind, t, m),
-        Kind::QcdCoulomb => Pairs::<qcd_coulomb::Fast>::boxed(kind, t, m),
+        Kind::Gravity => Pairs::<gravity::Fast>::boxed(kind, t, m, pool),
+        Kind::LennardJones => Pairs::<lennard_jones::Plain>::boxed(kind, t, m, pool),
+        Kind::LennardJonesShifted => Pairs::<lennard_jones::Shifted>::boxed(kind, t, m, pool),
+        Kind::LennardJonesForceShifted => Pairs::<lennard_jones::ForceShifted>::boxed(kind, t, m, pool),
+        Kind::Wca => Pairs::<wca::Fast>::boxed(kind, t, m, pool),
+        Kind::Coulomb => Pairs::<coulomb::Fast>::boxed(kind, t, m, pool),
+        Kind::CoulombReactionField => Pairs::<coulomb_reaction_field::Fast>::boxed(kind, t, m, pool),
+        Kind::Yukawa => Pairs::<yukawa::Fast>::boxed(kind, t, m, pool),
+        Kind::NuclearYukawa => Pairs::<nuclear_yukawa::Fast>::boxed(kind, t, m, pool),
+        Kind::QcdCoulomb => Pairs::<qcd_coulomb::Fast>::boxed(kind, t, m, pool),
         Kind::UniformAcceleration => Fields::<uniform_acceleration::Fast>::boxed(kind, t),
         Kind::GravityWell => Fields::<gravity_well::Fast>::boxed(kind, t),
         Kind::HarmonicTrap => Fields::<harmonic_trap::Fast>::boxed(kind, t),
@@ -173,7 +179,7 @@ mod tests {
                 bodies,
                 terms: vec![TermInstance { kind, sites, params }],
             };
-            let g = group(kind, &[&model.terms[0]], &model);
+            let g = group(kind, &[&model.terms[0]], &model, &None);
             for r in [1e-300, 1e-160, 1e-100, 1e-20, 1e-8, 0.0] {
                 // at the origin, so that a tiny separation is not lost to rounding
                 let mut x = vec![[0.0; 3], [r, 0.0, 0.0]];

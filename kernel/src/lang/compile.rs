@@ -3,6 +3,7 @@
 
 use super::block::{flags, typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
+use super::lattice::{self, Packing};
 use super::{Pair, Rule};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{Scene, Solver};
@@ -15,6 +16,7 @@ use std::collections::HashMap;
 
 /// Types every scene knows without declaring them: display sizes only.
 const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
+const LATTICE_FIELDS: &[&str] = &["type", "kind", "density", "cells", "temperature", "seed"];
 const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "colour", "size"];
 
 /// The colour charges, weights of SU(3)'s fundamental representation (|c|² = 1/3), and the
@@ -52,6 +54,8 @@ struct Compiler<'a> {
     term_at: Vec<Span>,
     description: Option<String>,
     domain: Option<String>,
+    /// Whether the box came from a lattice.
+    lattice: bool,
 }
 
 pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
@@ -88,6 +92,7 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         term_at: vec![],
         description: None,
         domain: None,
+        lattice: false,
     };
     for item in items {
         c.item(item)?;
@@ -202,9 +207,16 @@ impl<'a> Compiler<'a> {
                 self.predictions.push((kind, tol, name.as_span().into()));
                 Ok(())
             }
+            Rule::lattice => {
+                let block = Block::read(next().and(next()), span)?;
+                self.lattice(block, span)
+            }
             Rule::cell => {
                 if self.cell.is_some() {
-                    return err(span, "second box");
+                    return err(
+                        span,
+                        if self.lattice { "the lattice above sets the box: remove this box" } else { "second box" },
+                    );
                 }
                 let mut b = Block::read(next().and(next()), span)?;
                 let size =
@@ -231,24 +243,7 @@ impl<'a> Compiler<'a> {
     }
 
     fn entity(&mut self, mut b: Block<'a>) -> Result<(), Diagnostic> {
-        let mut size = None;
-        let template = match b.take("type") {
-            None => None,
-            Some(f) => {
-                let (name, at) = word(&f, "entity")?;
-                if let Some(t) = BUILTIN_TYPES.iter().find(|t| t.0 == name) {
-                    size = Some(t.1);
-                    None
-                } else if let Some(t) = self.templates.get(name) {
-                    Some(t)
-                } else {
-                    let mut known: Vec<&str> =
-                        self.templates.keys().copied().chain(BUILTIN_TYPES.iter().map(|t| t.0)).collect();
-                    known.sort();
-                    return err(at, format!("unknown entity type `{name}`; known types: {}", known.join(", ")));
-                }
-            }
-        };
+        let (template, size) = self.entity_type(&mut b, "entity")?;
         b.check_names("entity", ENTITY_FIELDS)?;
         let at = b.span;
         let mut field = |name: &str| b.take(name).or_else(|| template.and_then(|t| t.get(name).cloned()));
@@ -259,6 +254,38 @@ impl<'a> Compiler<'a> {
             Some(f) => vec3(self.rd.numbers(&f, "entity", Dim::VELOCITY, 3)?),
             None => [0.0; 3],
         };
+        let (body, size) = self.body(&mut field, at, size)?;
+        self.bodies.push(body);
+        self.x0.push(x);
+        self.v0.push(v);
+        self.sizes.push(size);
+        Ok(())
+    }
+
+    /// The `type` field: a declared template (its fields are defaults), or a built-in type (a
+    /// display size).
+    fn entity_type(&self, b: &mut Block<'a>, owner: &str) -> Result<(Option<&Block<'a>>, Option<f64>), Diagnostic> {
+        let Some(f) = b.take("type") else { return Ok((None, None)) };
+        let (name, at) = word(&f, owner)?;
+        if let Some(t) = BUILTIN_TYPES.iter().find(|t| t.0 == name) {
+            Ok((None, Some(t.1)))
+        } else if let Some(t) = self.templates.get(name) {
+            Ok((Some(t), None))
+        } else {
+            let mut known: Vec<&str> =
+                self.templates.keys().copied().chain(BUILTIN_TYPES.iter().map(|t| t.0)).collect();
+            known.sort();
+            err(at, format!("unknown entity type `{name}`; known types: {}", known.join(", ")))
+        }
+    }
+
+    /// Mass, charge, colour and display size from an entity's fields.
+    fn body(
+        &self,
+        field: &mut impl FnMut(&str) -> Option<Field<'a>>,
+        at: Span,
+        size: Option<f64>,
+    ) -> Result<(Body, f64), Diagnostic> {
         let mass =
             field("mass").ok_or_else(|| Diagnostic::new(at, "entity needs a mass (or a type that gives one)"))?;
         let mass = self.rd.positive(&mass, "entity", Dim::MASS)?;
@@ -279,13 +306,70 @@ impl<'a> Compiler<'a> {
                 }
             }
         };
-        if let Some(f) = field("size") {
-            size = Some(self.rd.positive(&f, "entity", Dim::LENGTH)?);
+        let size = match field("size") {
+            Some(f) => self.rd.positive(&f, "entity", Dim::LENGTH)?,
+            None => size.unwrap_or(0.0),
+        };
+        Ok((Body { mass, charge, colour }, size))
+    }
+
+    /// `lattice { type, kind: fcc, density, cells: [nx, ny, nz], temperature, seed }`: bodies on
+    /// a lattice filling a periodic box of its own, with Maxwell–Boltzmann velocities.
+    fn lattice(&mut self, mut b: Block<'a>, at: Span) -> Result<(), Diagnostic> {
+        if self.cell.is_some() {
+            let what = if self.lattice {
+                "second lattice: one per scene"
+            } else {
+                "a lattice sets the box itself: remove the box above"
+            };
+            return err(at, what);
         }
-        self.bodies.push(Body { mass, charge, colour });
-        self.x0.push(x);
-        self.v0.push(v);
-        self.sizes.push(size.unwrap_or(0.0));
+        b.check_names("lattice", LATTICE_FIELDS)?;
+        let (template, size) = self.entity_type(&mut b, "lattice")?;
+        let template =
+            template.ok_or_else(|| Diagnostic::new(at, "lattice needs `type:` an entity type declared with a mass"))?;
+        let kind = match b.take("kind") {
+            None => Packing::Fcc,
+            Some(f) => {
+                let (name, at) = word(&f, "lattice")?;
+                Packing::from_name(name)
+                    .ok_or_else(|| Diagnostic::new(at, format!("unknown lattice kind `{name}`; known: fcc, sc")))?
+            }
+        };
+        let need = |b: &mut Block<'a>, name: &str, what: &str| {
+            b.take(name).ok_or_else(|| Diagnostic::new(at, format!("lattice needs `{name}: {what}`")))
+        };
+        let density =
+            self.rd.positive(&need(&mut b, "density", "bodies per unit volume")?, "lattice", Dim::LENGTH.pow(-3))?;
+        let cells_f = need(&mut b, "cells", "[nx, ny, nz]")?;
+        let cells = self.rd.numbers(&cells_f, "lattice", Dim::NONE, 3)?;
+        if let Some(c) = cells.iter().find(|c| !(**c >= 1.0 && c.fract() == 0.0 && **c <= 1000.0)) {
+            return err(value_span(&cells_f), format!("lattice.cells expects whole numbers from 1 to 1000, got {c}"));
+        }
+        let temperature = match b.take("temperature") {
+            None => 0.0,
+            Some(f) if self.rd.system == UnitSystem::Reduced => self.rd.numbers(&f, "lattice", Dim::NONE, 1)?[0],
+            Some(f) => {
+                return err(f.span, "lattice.temperature is k_B·T in reduced units; an SI scene lists its velocities")
+            }
+        };
+        if !(temperature >= 0.0 && temperature.is_finite()) {
+            return err(at, format!("lattice.temperature must be zero or positive, got {temperature}"));
+        }
+        let seed = b.take("seed").map(|f| self.rd.count(&f, "lattice")).transpose()?.unwrap_or(1);
+        let mut field = |name: &str| template.get(name).cloned();
+        let (body, size) = self.body(&mut field, at, size)?;
+        let cells = [cells[0] as usize, cells[1] as usize, cells[2] as usize];
+        let (x, side) = kind.sites(density, cells);
+        let v = lattice::velocities(x.len(), temperature / body.mass, seed);
+        self.cell = Some((Cell { size: side, periodic: [true; 3] }, at));
+        self.lattice = true;
+        for (x, v) in x.into_iter().zip(v) {
+            self.bodies.push(body.clone());
+            self.x0.push(x);
+            self.v0.push(v);
+            self.sizes.push(size);
+        }
         Ok(())
     }
 

@@ -3,6 +3,7 @@
 mod block;
 mod compile;
 mod diagnostic;
+mod lattice;
 mod syntax;
 mod units;
 

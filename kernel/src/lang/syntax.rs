@@ -30,6 +30,7 @@ fn describe(r: &Rule) -> &'static str {
         Rule::predict => "`@predict`",
         Rule::solver | Rule::kw_solver => "`solver`",
         Rule::cell | Rule::kw_box => "`box`",
+        Rule::lattice | Rule::kw_lattice => "`lattice`",
         Rule::flags => "`[true, false, ...]`",
         Rule::item => "a scene item",
         Rule::file | Rule::WHITESPACE | Rule::COMMENT | Rule::ident_char => "input",

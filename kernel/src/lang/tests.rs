@@ -11,8 +11,12 @@ const GOOD: &str = r#"scene s {
 
 /// The (line, column, message) of the error in `GOOD` with `from` replaced by `to`.
 fn error(from: &str, to: &str) -> (usize, usize, String) {
-    assert!(GOOD.contains(from), "{from}");
-    let src = GOOD.replacen(from, to, 1);
+    error_in(GOOD, from, to)
+}
+
+fn error_in(good: &str, from: &str, to: &str) -> (usize, usize, String) {
+    assert!(good.contains(from), "{from}");
+    let src = good.replacen(from, to, 1);
     let d = compile(&src).expect_err("must not compile");
     let (l, c) = d.line_col(&src);
     (l, c, d.message)
@@ -31,7 +35,7 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
-    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver`, `box` or a name, found end of file"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver`, `box`, `lattice` or a name, found end of file"));
 }
 
 #[test]
@@ -294,5 +298,52 @@ fn external_terms_act_on_listed_bodies() {
     assert_eq!(
         compile(&with("interaction gravity { G: 1, on: [0] }")).unwrap_err().message,
         "Gravity acts on every pair; `on` belongs to external terms"
+    );
+}
+
+const LATTICE: &str = r#"scene s {
+  entity atom { mass: 1.0 }
+  lattice { type: atom, kind: fcc, density: 0.8442, cells: [3, 4, 5], temperature: 1.44, seed: 5 }
+  interaction lj { epsilon: 1, sigma: 1, cutoff: 2.5 }
+  solver { dt: 0.005, steps: 10 }
+}"#;
+
+fn lattice_error(from: &str, to: &str) -> (usize, usize, String) {
+    error_in(LATTICE, from, to)
+}
+
+#[test]
+fn a_lattice_fills_its_own_periodic_box() {
+    let s = compile(LATTICE).unwrap();
+    assert_eq!(s.model.bodies.len(), 4 * 3 * 4 * 5);
+    let c = s.model.cell.unwrap();
+    let a = (4.0f64 / 0.8442).cbrt();
+    assert_eq!(c.periodic, [true; 3]);
+    assert!((c.size[2] - 5.0 * a).abs() < 1e-12, "{:?}", c.size);
+}
+
+#[test]
+fn lattice_errors() {
+    assert_eq!(
+        lattice_error("  interaction", "  box { size: [9, 9, 9] }\n  interaction"),
+        at(4, 3, "the lattice above sets the box: remove this box")
+    );
+    assert_eq!(
+        lattice_error("  lattice", "  box { size: [9, 9, 9] }\n  lattice"),
+        at(4, 3, "a lattice sets the box itself: remove the box above")
+    );
+    assert_eq!(lattice_error("kind: fcc", "kind: hcp"), at(3, 31, "unknown lattice kind `hcp`; known: fcc, sc"));
+    assert_eq!(
+        lattice_error("cells: [3, 4, 5]", "cells: [3, 4.5, 5]"),
+        at(3, 60, "lattice.cells expects whole numbers from 1 to 1000, got 4.5")
+    );
+    assert_eq!(lattice_error("density: 0.8442, ", ""), at(3, 3, "lattice needs `density: bodies per unit volume`"));
+    assert_eq!(
+        lattice_error("type: atom, ", ""),
+        at(3, 3, "lattice needs `type:` an entity type declared with a mass")
+    );
+    assert_eq!(
+        lattice_error("seed: 5", "seed: 5, colour: red"),
+        at(3, 99, "unknown field `colour` for lattice; expected type, kind, density, cells, temperature, seed")
     );
 }
