@@ -1,5 +1,6 @@
 //! `lagra`: run a scene and certify its claims.
 
+mod bench;
 mod check;
 mod list;
 mod report;
@@ -38,6 +39,8 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
     List(list::Args),
     /// Print the vocabulary of terms: name, how it is written, parameters and dimensions.
     Terms,
+    /// Studies of speed and accuracy (`lagra bench precision`: run time against error).
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -46,5 +49,6 @@ fn main() -> ExitCode {
         Command::Check(args) => check::main(args),
         Command::List(args) => list::main(args),
         Command::Terms => terms::main(),
+        Command::Bench(args) => bench::main(args),
     }
 }

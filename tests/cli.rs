@@ -308,3 +308,29 @@ fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
     let o = lagra(&["run", scene, "--threads", "0"]);
     assert_eq!((o.status.code(), stderr(&o).trim()), (Some(2), "lagra: --threads must be at least 1"));
 }
+
+/// The work-precision study writes its CSV, plot and table, and even its two-step smoke run
+/// shows the oscillator's orders: 2 for velocity Verlet, 4 for Yoshida.
+#[test]
+fn bench_precision_writes_csv_plot_and_orders() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = lagra(&["bench", "precision", "--quick", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    let csv = std::fs::read_to_string(dir.path().join("precision.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4 * 3 * 2, "{csv}");
+    let svg = std::fs::read_to_string(dir.path().join("precision.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("yoshida4"));
+    let table = std::fs::read_to_string(dir.path().join("precision.md")).unwrap();
+    let oscillator = table.lines().find(|l| l.starts_with("| oscillator")).unwrap();
+    let orders: Vec<f64> = oscillator.split('|').filter_map(|c| c.trim().parse().ok()).collect();
+    assert!((orders[0] - 2.0).abs() < 0.3 && (orders[1] - 4.0).abs() < 0.3, "{oscillator}");
+}
+
+#[test]
+fn bench_overhead_reports_a_ratio() {
+    let o = lagra(&["bench", "overhead", "--steps", "2000", "--repeats", "1", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["ratio"].as_f64().unwrap() > 0.0);
+    assert!(v["final_position_difference"].as_f64().unwrap() < 1e-9, "the engine and the hand loop agree");
+}

@@ -11,6 +11,10 @@ use std::sync::Arc;
 
 pub struct LagrangianGraph {
     pub masses: Vec<f64>,
+    /// 1/m, so a kick multiplies.
+    pub inverse_masses: Vec<f64>,
+    /// Whether any group's force depends on velocities (asked every step: kept, not recomputed).
+    velocity_dependent: bool,
     charges: Vec<f64>,
     colours: Vec<[f64; 2]>,
     groups: Vec<(Kind, Box<dyn Force>)>,
@@ -48,7 +52,10 @@ impl LagrangianGraph {
         }
         let masses = model.bodies.iter().map(|b| b.mass).collect();
         let charges = model.bodies.iter().map(|b| b.charge).collect();
-        LagrangianGraph { masses, charges, colours: model.bodies.iter().map(|b| b.colour).collect(), groups }
+        let inverse_masses = model.bodies.iter().map(|b| 1.0 / b.mass).collect();
+        let velocity_dependent = groups.iter().any(|g| g.1.velocity_dependent());
+        let colours = model.bodies.iter().map(|b| b.colour).collect();
+        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups }
     }
 
     /// The kinds present, in dispatch order.
@@ -63,7 +70,7 @@ impl LagrangianGraph {
 
     /// Whether any group has a velocity-dependent force.
     pub fn velocity_dependent(&self) -> bool {
-        self.groups.iter().any(|g| g.1.velocity_dependent())
+        self.velocity_dependent
     }
 
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).

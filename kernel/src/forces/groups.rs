@@ -81,11 +81,16 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
         let mut energy = Sum::default();
         for (k, b) in self.sites.iter().enumerate() {
             // positions relative to the first body, by minimum image in a periodic cell
-            let x0 = s.x[b[0]];
-            let x: [[f64; 3]; N] = std::array::from_fn(|i| {
-                let d = Cell::image(&self.cell, sub(&s.x[b[i]], &x0));
-                [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
-            });
+            let x: [[f64; 3]; N] = match &self.cell {
+                None => std::array::from_fn(|i| s.x[b[i]]),
+                Some(_) => {
+                    let x0 = s.x[b[0]];
+                    std::array::from_fn(|i| {
+                        let d = Cell::image(&self.cell, sub(&s.x[b[i]], &x0));
+                        [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
+                    })
+                }
+            };
             let v: [[f64; 3]; N] = std::array::from_fn(|i| s.v[b[i]]);
             let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(Finite::finite).map_err(|what| Singularity {
                 term: self.name,

@@ -12,10 +12,9 @@ impl Bonded<2> for Fast {
         if r == 0.0 {
             return Err("at the same point, where the bond's direction is undefined");
         }
-        let u = d.map(|c| c / r);
-        let rdot: f64 = (0..3).map(|c| (v[1][c] - v[0][c]) * u[c]).sum();
-        let along = k * (r - r0) + gamma * rdot;
-        let a = u.map(|c| c * along);
+        let rdot: f64 = (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() / r;
+        let s = (k * (r - r0) + gamma * rdot) / r;
+        let a = d.map(|c| c * s);
         Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))
     }
 

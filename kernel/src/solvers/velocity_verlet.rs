@@ -32,7 +32,7 @@ impl VelocityVerlet {
     /// Advances positions and velocities by `h` (the step counter and clock are the caller's).
     pub fn advance(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Singularity> {
         let h = 0.5 * dt;
-        kick(&mut s.v, &self.f, &g.masses, h);
+        kick(&mut s.v, &self.f, &g.inverse_masses, h);
         for (x, v) in s.x.iter_mut().zip(&s.v) {
             for c in 0..3 {
                 x[c] += dt * v[c];
@@ -40,12 +40,12 @@ impl VelocityVerlet {
         }
         let half = if g.velocity_dependent() { Some(s.v.clone()) } else { None };
         self.potential = g.forces(s, &mut self.f)?;
-        kick(&mut s.v, &self.f, &g.masses, h);
+        kick(&mut s.v, &self.f, &g.inverse_masses, h);
         if let Some(half) = half {
             for _ in 0..MAX_ITERATIONS {
                 self.potential = g.forces(s, &mut self.f)?;
                 let guess = std::mem::replace(&mut s.v, half.clone());
-                kick(&mut s.v, &self.f, &g.masses, h);
+                kick(&mut s.v, &self.f, &g.inverse_masses, h);
                 if s.v == guess {
                     break;
                 }
@@ -55,10 +55,12 @@ impl VelocityVerlet {
     }
 }
 
-fn kick(v: &mut [[f64; 3]], f: &[[f64; 3]], m: &[f64], h: f64) {
-    for ((v, f), m) in v.iter_mut().zip(f).zip(m) {
+/// v += h·F/m, with `inverse` the 1/m of each body.
+fn kick(v: &mut [[f64; 3]], f: &[[f64; 3]], inverse: &[f64], h: f64) {
+    for ((v, f), w) in v.iter_mut().zip(f).zip(inverse) {
+        let s = h * w;
         for c in 0..3 {
-            v[c] += h * f[c] / m;
+            v[c] += s * f[c];
         }
     }
 }
@@ -97,9 +99,9 @@ mod tests {
         let mut f = vec![[0.0; 3]; 2];
         g.forces(&s, &mut f).unwrap();
         let mut half = s.v.clone();
-        kick(&mut half, &f, &g.masses, -0.5 * dt);
+        kick(&mut half, &f, &g.inverse_masses, -0.5 * dt);
         let mut again = half.clone();
-        kick(&mut again, &f, &g.masses, 0.5 * dt);
+        kick(&mut again, &f, &g.inverse_masses, 0.5 * dt);
         for (a, b) in again.iter().flatten().zip(s.v.iter().flatten()) {
             assert!((a - b).abs() <= 4.0 * f64::EPSILON * b.abs().max(1.0), "{a} vs {b}");
         }
