@@ -104,7 +104,7 @@ fn problems(quick: bool) -> Vec<Problem> {
             t_end: 10.0,
             dts: ladder(0.2, n),
             error: |_, s, _| (distance(s.x[0], s.x[1]) - (2.0 + 0.7 * (2.0 * s.t).cos())).abs(),
-            what: "|r(t) − r_exact(t)| at t = 10",
+            what: "error of r(t) against the closed form at t = 10",
         },
         Problem {
             name: "kepler_e0.5",
@@ -112,7 +112,7 @@ fn problems(quick: bool) -> Vec<Problem> {
             t_end: orbits * std::f64::consts::TAU,
             dts: ladder(0.02, n),
             error: |s0, s, _| distance(separation(s), separation(s0)),
-            what: "|Δx| after 10 periods (phase and period error)",
+            what: "distance from the start after 10 periods (phase and period error)",
         },
         Problem {
             name: "kepler_e0.9",
@@ -120,7 +120,7 @@ fn problems(quick: bool) -> Vec<Problem> {
             t_end: orbits * std::f64::consts::TAU,
             dts: ladder(0.004, n),
             error: |s0, s, _| distance(separation(s), separation(s0)),
-            what: "|Δx| after 10 periods (phase and period error)",
+            what: "distance from the start after 10 periods (phase and period error)",
         },
         Problem {
             name: "lj_liquid",
@@ -128,7 +128,7 @@ fn problems(quick: bool) -> Vec<Problem> {
             t_end: if quick { 0.1 } else { 5.0 },
             dts: ladder(0.01, if quick { 2 } else { 4 }),
             error: |_, _, e| ((e.end - e.start) / e.start).abs(),
-            what: "|H(t) − H₀|/|H₀| at t = 5 (256 atoms)",
+            what: "relative energy error at t = 5 (256 atoms)",
         },
     ]
 }
@@ -277,6 +277,14 @@ fn precision(out: &PathBuf, quick: bool) -> Result<String, String> {
         let _ = writeln!(md, "| {} | {} | {} |", p.name, p.what, orders.join(" | "));
     }
     write("precision.md", &md)?;
+    // keep the table in the folder's README (docs/bench/README.md) true
+    let readme = out.join("README.md");
+    if let Ok(text) = std::fs::read_to_string(&readme) {
+        let (open, close) = ("<!-- precision: begin -->\n", "<!-- precision: end -->");
+        if let (Some(a), Some(b)) = (text.find(open), text.find(close)) {
+            write("README.md", &format!("{}{open}{md}{}", &text[..a], &text[b..]))?;
+        }
+    }
     Ok(format!("observed orders (slope of log error against log dt):\n{md}wrote precision.csv, precision.svg, precision.md in {}\n", out.display()))
 }
 

@@ -7,6 +7,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod broad_phase;
 pub mod certificate;
 pub mod checksum;
 pub mod claims;

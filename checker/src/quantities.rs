@@ -1,6 +1,7 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
+use crate::broad_phase;
 use crate::model::{Cell, Model, Snapshot, TermInstance};
 use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Shape, Site};
@@ -72,14 +73,14 @@ impl<R: Real> Lifted<R> {
                 Shape::Pairwise => {
                     // Broad phase: a pair farther than the term's reach by a relative margin of
                     // 1e-6 (far more than any enclosure of r² is wide) contributes exactly zero.
-                    let beyond = t.kind.reach(&t.params).map_or(f64::INFINITY, |r| r * r * (1.0 + 1e-6));
-                    for i in 0..self.sites.len() {
-                        for j in i + 1..self.sites.len() {
-                            let d: [f64; 3] = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
-                            let d = Cell::image(&self.cell, d);
-                            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= beyond {
-                                f(n, &[&self.sites[i], &self.seen_from(i, j)]);
-                            }
+                    // The candidates come from a grid (`broad_phase`), in the double loop's order.
+                    let reach = t.kind.reach(&t.params);
+                    let beyond = reach.map_or(f64::INFINITY, |r| r * r * (1.0 + 1e-6));
+                    for (i, j) in broad_phase::candidates(&self.x, &self.cell, reach.map(|r| r * (1.0 + 1e-6))) {
+                        let d: [f64; 3] = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
+                        let d = Cell::image(&self.cell, d);
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= beyond {
+                            f(n, &[&self.sites[i], &self.seen_from(i, j)]);
                         }
                     }
                 }

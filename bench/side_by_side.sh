@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# Lagra and LAMMPS side by side, in one run on this machine; rewrites the results section of
+# docs/bench/README.md. Needs LAMMPS (`bash ../shared/peers/lammps.sh install`, Debian `lammps`).
+#   bash bench/side_by_side.sh            # everything (about 5 minutes)
+#   bash bench/side_by_side.sh --no-drift # skip the two 10,000-step drift runs
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+peers=${LAGRA_PEERS:-$root/../shared/peers}
+work=${LAMMPS_WORK:-/tmp/lagra-lammps}
+out=$root/target/bench
+mkdir -p "$out" "$work"
+command -v lmp >/dev/null || { echo "LAMMPS (lmp) is not installed: bash $peers/lammps.sh install" >&2; exit 2; }
+cargo build --release -q
+lagra=$root/target/release/lagra
+drift=yes; [ "${1:-}" = --no-drift ] && drift=no
+
+lammps_ns() { awk '/Loop time of/ {printf "%.1f", $4/$9/$12*1e9}' "$1"; }
+json() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
+
+echo "LJ 32k, LAMMPS" >&2
+cp "$peers"/*.lmp "$work"/
+(cd "$work" && taskset -c 0 lmp -in w1.lmp -var n 20 -log w1.log -screen none \
+  && taskset -c 0 lmp -in w1.lmp -var n 20 -sf opt -log w1opt.log -screen none \
+  && taskset -c 0,1 mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in w1.lmp -var n 20 -log w1mpi.log -screen none >/dev/null 2>&1 \
+  && taskset -c 0,1 mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in w1.lmp -var n 20 -sf opt -log w1optmpi.log -screen none >/dev/null 2>&1)
+echo "LJ 32k, Lagra" >&2
+taskset -c 0 "$lagra" run scenes/bench/lj_32k.lagra --json > "$out/lj32k_1.json"
+taskset -c 0,1 "$lagra" run scenes/bench/lj_32k.lagra --threads 2 --json > "$out/lj32k_2.json"
+echo "two particles" >&2
+(cd "$work" && taskset -c 0 lmp -in w0.lmp -var nsteps 1000000 -log w0.log -screen none)
+taskset -c 0 "$lagra" run scenes/bench/lj_pair.lagra --json > "$out/pair.json"
+echo "checker overhead" >&2
+taskset -c 0 "$lagra" run scenes/bench/lj_32k_shifted.lagra --json > "$out/unchecked.json"
+taskset -c 0 "$lagra" run scenes/bench/lj_32k_checked.lagra --json > "$out/checked.json"
+echo "oscillator overhead" >&2
+taskset -c 0 "$lagra" bench overhead --json > "$out/overhead.json"
+
+if [ $drift = yes ]; then
+  echo "drift, LAMMPS (10,000 steps)" >&2
+  (cd "$work" && taskset -c 0 lmp -in w2.lmp -var n 10 -var dt 0.005 -var nsteps 10000 -var every 10 -var shift yes -log w2.log -screen none)
+  echo "drift, Lagra (10,000 steps)" >&2
+  taskset -c 0 "$lagra" run scenes/bench/lj_4k_drift.lagra --json --trace "$out/drift.jsonl" > "$out/drift.json"
+fi
+
+python3 - "$out" "$work" "$drift" <<'PY' > "$out/results.md"
+import json, sys, re
+out, work, drift = sys.argv[1], sys.argv[2], sys.argv[3] == "yes"
+j = lambda n: json.load(open(f"{out}/{n}"))
+def lammps(log):
+    t = open(f"{work}/{log}").read()
+    m = re.search(r"Loop time of ([\d.e+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", t)
+    return float(m[1]), int(m[3]), int(m[4])
+def ns(log):
+    t, s, a = lammps(log); return t / s / a * 1e9
+l1, l2 = j("lj32k_1.json"), j("lj32k_2.json")
+opt1 = ns("w1opt.log")
+print("### LJ benchmark (bench/in.lj: 32,000 atoms, 100 NVE steps), ns per atom-step, lower is better\n")
+print("| engine | 1 thread / rank | 2 threads / ranks |\n|---|---|---|")
+print(f"| LAMMPS `lj/cut` | {ns('w1.log'):.0f} | {ns('w1mpi.log'):.0f} (MPI) |")
+print(f"| LAMMPS `-sf opt` | {opt1:.0f} | {ns('w1optmpi.log'):.0f} (MPI) |")
+print(f"| Lagra | {l1['ns_per_atom_step']:.0f} | {l2['ns_per_atom_step']:.0f} |")
+print(f"\nLagra / LAMMPS `-sf opt` on one thread: **{l1['ns_per_atom_step']/opt1:.2f}×** the time per atom-step.\n")
+t, s, a = lammps("w0.log"); p = j("pair.json")
+print("### Two LJ particles (per-step overhead), steps per second, higher is better\n")
+print("| LAMMPS (w0) | Lagra (lj_pair) | Lagra / LAMMPS |\n|---|---|---|")
+print(f"| {s/t:,.0f} | {p['steps_per_s']:,.0f} | {p['steps_per_s']/(s/t):.1f}× |\n")
+u, c = j("unchecked.json"), j("checked.json")
+print("### The checker's cost: 32,000 atoms, shifted LJ, 100 steps, energy and momentum certified every 100 steps\n")
+print("| without claims | with claims | overhead | verdicts |\n|---|---|---|---|")
+verdicts = "; ".join(x["line"].replace("|", "\\|") for x in c["claims"])
+print(f"| {u['wall_s']:.2f} s | {c['wall_s']:.2f} s | {100*(c['wall_s']/u['wall_s']-1):.0f}% | {verdicts} |\n")
+o = j("overhead.json")
+print("### Two-bead oscillator: Lagra's run loop against a hand-written velocity Verlet loop\n")
+print("| Lagra ns/step | hand loop ns/step | ratio |\n|---|---|---|")
+print(f"| {o['engine_s']*1e9/o['steps']:.1f} | {o['hand_s']*1e9/o['steps']:.1f} | {o['ratio']:.2f} |\n")
+if drift:
+    rows = [l.split() for l in open(f"{work}/w2.log") if re.match(r"^\s+\d+\s+[-\d.e+]+\s+[-\d.e+]+\s+[-\d.e+]+\s+[-\d.e+]+\s*$", l)]
+    e = [float(r[4]) for r in rows]
+    lm = max(abs(x - e[0]) for x in e) / abs(e[0]); lf = abs(e[-1] - e[0]) / abs(e[0])
+    le = [json.loads(l)["energy"] for l in open(f"{out}/drift.jsonl")]
+    gm = max(abs(x - le[0]) for x in le) / abs(le[0]); gf = abs(le[-1] - le[0]) / abs(le[0])
+    t2, s2, a2 = lammps("w2.log"); d = j("drift.json")
+    print("### Energy drift at equal dt (4,000 atoms, shifted LJ at 2.5, dt 0.005, 10,000 steps, exact neighbour lists)\n")
+    print("| engine | max relative energy error | final relative energy error | ns/atom-step |\n|---|---|---|---|")
+    print(f"| LAMMPS | {lm:.2e} | {lf:.2e} | {t2/s2/a2*1e9:.0f} |")
+    print(f"| Lagra | {gm:.2e} | {gf:.2e} | {d['ns_per_atom_step']:.0f} |")
+    print("\nThe two start from the same lattice and temperature but different velocity draws (LAMMPS's generator is its own), so the drifts are comparable statistically, not trajectory by trajectory.\n")
+PY
+python3 - "$out/results.md" docs/bench/README.md <<'PY'
+import sys
+res, readme = open(sys.argv[1]).read(), sys.argv[2]
+t = open(readme).read()
+a, b = t.index("<!-- results: begin -->"), t.index("<!-- results: end -->")
+open(readme, "w").write(t[:a] + "<!-- results: begin -->\n" + res + t[b:])
+PY
+cat "$out/results.md"
