@@ -5,8 +5,14 @@ use super::{central, Paired};
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let a = p[0] * qi * qj;
+    type Row = f64;
+    const BODIES: bool = true;
+    fn row(p: &[f64]) -> f64 {
+        p[0]
+    }
+    #[inline(always)]
+    fn eval(k: &f64, d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        let a = k * qi * qj;
         central(d, |r| (a / r, -a / (r * r)))
     }
 }

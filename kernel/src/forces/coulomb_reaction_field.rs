@@ -6,13 +6,28 @@ use super::Paired;
 
 pub struct Fast;
 
+/// k, r_c² and the reaction-field constants k_rf, c_rf.
+#[derive(Clone, Copy)]
+pub struct Row {
+    k: f64,
+    rc2: f64,
+    krf: f64,
+    crf: f64,
+}
+
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+    type Row = Row;
+    const BODIES: bool = true;
+    fn row(p: &[f64]) -> Row {
         let (rc, e) = (p[1], p[2]);
         let krf = (e - 1.0) / ((2.0 * e + 1.0) * rc * rc * rc);
-        let crf = 1.0 / rc + krf * rc * rc;
-        let a = p[0] * qi * qj;
-        cut(d, rc, |r2| {
+        Row { k: p[0], rc2: rc * rc, krf, crf: 1.0 / rc + krf * rc * rc }
+    }
+    #[inline(always)]
+    fn eval(p: &Row, d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        let (krf, crf) = (p.krf, p.crf);
+        let a = p.k * qi * qj;
+        cut(d, p.rc2, |r2| {
             let r = r2.sqrt();
             (a * (1.0 / r + krf * r2 - crf), a * (2.0 * krf - 1.0 / (r2 * r)))
         })

@@ -5,8 +5,14 @@ use super::{central, Paired};
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [mi, mj, _, _]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let gmm = p[0] * mi * mj;
+    type Row = f64;
+    const BODIES: bool = true;
+    fn row(p: &[f64]) -> f64 {
+        p[0]
+    }
+    #[inline(always)]
+    fn eval(g: &f64, d: [f64; 3], [mi, mj, _, _]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        let gmm = g * mi * mj;
         central(d, |r| (-gmm / r, gmm / (r * r)))
     }
 }

@@ -1,7 +1,7 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
 use super::{sub, Bonded, Field, Force, Frame, Paired, Pool, Singularity};
-use crate::neighbours::Neighbours;
+use crate::neighbours::{Neighbours, Pair};
 use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
@@ -114,9 +114,10 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     }
 }
 
-pub struct Pairs<T> {
+pub struct Pairs<T: Paired> {
     name: &'static str,
-    rows: Rows,
+    /// Each instance's constants (`Paired::row`).
+    rows: Vec<T::Row>,
     cell: Option<Cell>,
     /// The farthest any row reaches, if every row's reach is finite (then a cell list applies).
     reach: Option<f64>,
@@ -140,8 +141,8 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
         let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
         let list =
-            reach.filter(|_| m.bodies.len() >= LIST_FROM).and_then(|r| Neighbours::new(&m.cell, r)).map(Mutex::new);
-        let rows = Rows::new(kind, t);
+            reach.filter(|_| (LIST_FROM..Pair::BODIES).contains(&m.bodies.len())).and_then(|r| Neighbours::new(&m.cell, r)).map(Mutex::new);
+        let rows = t.iter().map(|t| T::row(&t.params)).collect();
         Box::new(Pairs::<T> {
             name: kind.name(),
             rows,
@@ -153,25 +154,30 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         })
     }
 
-    /// The pairs of bodies `is` from the list: forces into `f`, the energy returned. Rows are the
-    /// outer loop so that each one's parameters stay in registers through the pair loop.
-    fn listed(&self, l: &Neighbours, s: &Frame, is: Range<usize>, f: &mut [[f64; 3]]) -> Result<Sum, Singularity> {
+    /// The pairs of the positions `blocks` of the list: forces into `f`, by position, the energy
+    /// returned. Rows are the outer loop so that each one's constants stay in registers through
+    /// the pair loop.
+    fn listed(&self, l: &Neighbours, s: &Frame, blocks: Range<usize>, f: &mut [[f64; 3]]) -> Result<Sum, Singularity> {
         let x = &l.wrapped;
+        let body = |b: usize| l.bodies[b] as usize;
         let mut energy = Sum::default();
-        for p in self.rows.iter() {
-            for i in is.clone() {
+        for p in &self.rows {
+            for i in blocks.clone() {
                 let xi = x[i];
                 let mut fi = [0.0; 3];
                 // plain within a body's few dozen pairs, compensated across bodies
                 let mut ei = 0.0;
-                let range = l.start[i]..l.start[i + 1];
-                for (&j, &k) in l.j[range.clone()].iter().zip(&l.image[range]) {
-                    let j = j as usize;
-                    let sh = &l.shifts[usize::from(k) & 31];
+                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
+                    let j = pair.j();
+                    let sh = &l.shifts[pair.image()];
                     let d = [x[j][0] - xi[0] + sh[0], x[j][1] - xi[1] + sh[1], x[j][2] - xi[2] + sh[2]];
-                    let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
-                    let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
-                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                    let (mq, colour) = if T::BODIES || T::COLOUR {
+                        (bodies::<T>(s, body(i), body(j)), colour::<T>(s, body(i), body(j)))
+                    } else {
+                        ([0.0; 4], 0.0)
+                    };
+                    let (a, e) = T::eval(p, d, mq, colour)
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![body(i), body(j)], what })?;
                     for c in 0..3 {
                         fi[c] += a[c];
                         f[j][c] -= a[c];
@@ -187,27 +193,33 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         Ok(energy)
     }
 
-    /// Through the Verlet list, split by body into chunks of about equal pair counts.
+    /// Through the Verlet list, split by positions into chunks of about equal pair counts, each
+    /// summing into its own buffer (by position); the buffers are added in order and then given
+    /// back to the bodies.
     fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let n = s.x.len();
         let chunks = if n >= SPLIT_FROM { CHUNKS } else { 1 };
-        let total = l.pairs();
+        let total = l.count();
         let bounds: Vec<usize> = (0..=chunks)
             .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
             .collect();
-        let mut buffers = vec![vec![[0.0; 3]; n]; chunks - 1];
-        let mut targets: Vec<&mut [[f64; 3]]> =
-            std::iter::once(&mut *f).chain(buffers.iter_mut().map(|b| b.as_mut_slice())).collect();
-        let work = |(c, t): (usize, &mut &mut [[f64; 3]])| self.listed(l, s, bounds[c]..bounds[c + 1], t);
+        let mut buffers = vec![vec![[0.0; 3]; n]; chunks];
+        let work = |(c, t): (usize, &mut Vec<[f64; 3]>)| self.listed(l, s, bounds[c]..bounds[c + 1], t);
         let sums: Vec<Result<Sum, Singularity>> = match &self.pool {
-            Some(pool) if chunks > 1 => pool.install(|| targets.par_iter_mut().enumerate().map(work).collect()),
-            _ => targets.iter_mut().enumerate().map(work).collect(),
+            Some(pool) if chunks > 1 => pool.install(|| buffers.par_iter_mut().enumerate().map(work).collect()),
+            _ => buffers.iter_mut().enumerate().map(work).collect(),
         };
-        for b in &buffers {
-            for (fi, bi) in f.iter_mut().zip(b) {
+        let (first, rest) = buffers.split_first_mut().expect("one chunk at least");
+        for b in rest {
+            for (fi, bi) in first.iter_mut().zip(b.iter()) {
                 for c in 0..3 {
                     fi[c] += bi[c];
                 }
+            }
+        }
+        for (&i, fb) in l.bodies.iter().zip(first.iter()) {
+            for c in 0..3 {
+                f[i as usize][c] += fb[c];
             }
         }
         let mut energy = Sum::default();
@@ -222,9 +234,9 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     fn traversed(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
-            let colour = s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1];
-            for p in self.rows.iter() {
-                let (a, e) = T::eval(p, d, [s.m[i], s.m[j], s.q[i], s.q[j]], colour)
+            let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
+            for p in &self.rows {
+                let (a, e) = T::eval(p, d, mq, colour)
                     .and_then(Finite::finite)
                     .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
                 // applied so that the two are exactly opposite
@@ -237,6 +249,26 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             Ok(())
         })?;
         Ok(energy.value())
+    }
+}
+
+/// [mᵢ, mⱼ, qᵢ, qⱼ] if the term reads them, else zeros (and no loads).
+#[inline(always)]
+fn bodies<T: Paired>(s: &Frame, i: usize, j: usize) -> [f64; 4] {
+    if T::BODIES {
+        [s.m[i], s.m[j], s.q[i], s.q[j]]
+    } else {
+        [0.0; 4]
+    }
+}
+
+/// cᵢ·cⱼ if the term reads it, else zero.
+#[inline(always)]
+fn colour<T: Paired>(s: &Frame, i: usize, j: usize) -> f64 {
+    if T::COLOUR {
+        s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1]
+    } else {
+        0.0
     }
 }
 
@@ -269,7 +301,7 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
                     "Verlet list, half (Newton's third law), {reach} + skin {:.3}, built from a cell list, {} builds, {} pairs; {} on {threads} thread(s)",
                     l.skin,
                     l.builds,
-                    l.pairs(),
+                    l.count(),
                     if l.start.len() > SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
                 )
             }

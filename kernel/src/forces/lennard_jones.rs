@@ -4,23 +4,65 @@
 
 use super::Paired;
 
-/// The plain term and its derivative at r²: (V, dV/dr / r).
-pub(crate) fn lj(eps: f64, sigma: f64, r2: f64) -> (f64, f64) {
-    let inv = 1.0 / r2; // the one division
-    let s2 = sigma * sigma * inv;
-    let s6 = s2 * s2 * s2;
-    (4.0 * eps * (s6 * s6 - s6), 24.0 * eps * (s6 - 2.0 * s6 * s6) * inv)
+/// One instance's constants: 4ε, 24ε, σ², the cutoff r_c (and r_c²), and what is taken off
+/// inside it: the energy shift, and for the force-shifted variant the slope V′(r_c).
+#[derive(Clone, Copy)]
+pub struct Lj {
+    eps4: f64,
+    eps24: f64,
+    sigma2: f64,
+    rc: f64,
+    rc2: f64,
+    shift: f64,
+    slope: f64,
 }
 
-/// Within the cutoff, `inside(r²)` gives (V, dV/dr / r); beyond, nothing. (Computing both sides
-/// and selecting without a branch was measured slower on lj_32k.)
+impl Lj {
+    /// Cut at `rc`, with `shift` taken off the energy inside (WCA's −ε raises it).
+    pub(crate) fn new(eps: f64, sigma: f64, rc: f64, shift: f64) -> Lj {
+        Lj { eps4: 4.0 * eps, eps24: 24.0 * eps, sigma2: sigma * sigma, rc, rc2: rc * rc, shift, slope: 0.0 }
+    }
+
+    /// The term with its shift taken off, inside the cutoff.
+    #[inline(always)]
+    pub(crate) fn shifted(&self, d: [f64; 3]) -> Result<([f64; 3], f64), &'static str> {
+        cut(d, self.rc2, |r2| self.shifted_at(r2))
+    }
+
+    #[inline(always)]
+    pub(crate) fn shifted_at(&self, r2: f64) -> (f64, f64) {
+        let (v, s) = self.at(r2);
+        (v - self.shift, s)
+    }
+
+    /// The force-shifted form: V − V(r_c) − (r − r_c) V′(r_c), and its derivative.
+    #[inline(always)]
+    fn force_shifted_at(&self, r2: f64) -> (f64, f64) {
+        let r = r2.sqrt();
+        let (v, s) = self.at(r2);
+        (v - self.shift - (r - self.rc) * self.slope, s - self.slope / r)
+    }
+
+    /// The plain term and its derivative at r²: (V, dV/dr / r).
+    #[inline(always)]
+    pub(crate) fn at(&self, r2: f64) -> (f64, f64) {
+        let inv = 1.0 / r2; // the one division
+        let s2 = self.sigma2 * inv;
+        let s6 = s2 * s2 * s2;
+        (self.eps4 * (s6 * s6 - s6), self.eps24 * (s6 - 2.0 * s6 * s6) * inv)
+    }
+}
+
+/// Within the cutoff (r² < `rc2`), `inside(r²)` gives (V, dV/dr / r); beyond, nothing.
+/// (Computing both sides and selecting without a branch was measured slower on lj_32k.)
+#[inline(always)]
 pub(crate) fn cut(
     d: [f64; 3],
-    rc: f64,
+    rc2: f64,
     inside: impl FnOnce(f64) -> (f64, f64),
 ) -> Result<([f64; 3], f64), &'static str> {
     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if r2 >= rc * rc {
+    if r2 >= rc2 {
         return Ok(([0.0; 3], 0.0));
     }
     if r2 == 0.0 {
@@ -35,31 +77,38 @@ pub struct Shifted;
 pub struct ForceShifted;
 
 impl Paired for Plain {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        cut(d, p[2], |r2| lj(p[0], p[1], r2))
+    type Row = Lj;
+    fn row(p: &[f64]) -> Lj {
+        Lj::new(p[0], p[1], p[2], 0.0)
+    }
+    #[inline(always)]
+    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        lj.shifted(d)
     }
 }
 
 impl Paired for Shifted {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let vc = lj(p[0], p[1], p[2] * p[2]).0;
-        cut(d, p[2], |r2| {
-            let (v, s) = lj(p[0], p[1], r2);
-            (v - vc, s)
-        })
+    type Row = Lj;
+    fn row(p: &[f64]) -> Lj {
+        let lj = Lj::new(p[0], p[1], p[2], 0.0);
+        Lj { shift: lj.at(lj.rc2).0, ..lj } // V(r_c)
+    }
+    #[inline(always)]
+    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        lj.shifted(d)
     }
 }
 
 impl Paired for ForceShifted {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let rc = p[2];
-        let (vc, sc) = lj(p[0], p[1], rc * rc);
-        let slope = sc * rc; // V′(r_c)
-        cut(d, rc, |r2| {
-            let r = r2.sqrt();
-            let (v, s) = lj(p[0], p[1], r2);
-            (v - vc - (r - rc) * slope, s - slope / r)
-        })
+    type Row = Lj;
+    fn row(p: &[f64]) -> Lj {
+        let lj = Lj::new(p[0], p[1], p[2], 0.0);
+        let (vc, sc) = lj.at(lj.rc2);
+        Lj { shift: vc, slope: sc * lj.rc, ..lj } // V′(r_c)
+    }
+    #[inline(always)]
+    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        cut(d, lj.rc2, |r2| lj.force_shifted_at(r2))
     }
 }
 
@@ -89,9 +138,10 @@ mod tests {
         use super::{ForceShifted, Shifted};
         use crate::forces::Paired;
         let just_inside = [2.5f64.next_down(), 0.0, 0.0];
-        let (f, v) = Shifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4], 0.0).unwrap();
+        let p = [1.0, 1.0, 2.5];
+        let (f, v) = Shifted::eval(&Shifted::row(&p), just_inside, [1.0; 4], 0.0).unwrap();
         assert!(v.abs() < 1e-15 && f[0].abs() > 1e-3, "energy continuous, force not: {v} {f:?}");
-        let (f, v) = ForceShifted::eval(&[1.0, 1.0, 2.5], just_inside, [1.0; 4], 0.0).unwrap();
+        let (f, v) = ForceShifted::eval(&ForceShifted::row(&p), just_inside, [1.0; 4], 0.0).unwrap();
         assert!(v.abs() < 1e-15 && f[0].abs() < 1e-13, "both continuous: {v} {f:?}");
     }
 }

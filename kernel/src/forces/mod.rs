@@ -84,10 +84,18 @@ pub trait Bonded<const N: usize> {
 }
 
 /// The force on body i and the energy of one pair, given the displacement d = x_j − x_i
-/// (the minimum image in a periodic box), the masses and charges [mᵢ, mⱼ, qᵢ, qⱼ] and the
-/// product of the colour charges cᵢ·cⱼ; body j feels the opposite force.
+/// (the minimum image in a periodic box); body j feels the opposite force.
 pub trait Paired {
-    fn eval(p: &[f64], d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str>;
+    /// One instance's constants, worked out once from its parameters, so that the pair loop does
+    /// not redo per pair what depends on the parameters alone (the shifted LJ's V(r_c), 4ε, σ²).
+    type Row: Copy + Send + Sync;
+    fn row(p: &[f64]) -> Self::Row;
+    /// Whether `eval` reads the masses and charges [mᵢ, mⱼ, qᵢ, qⱼ], resp. the product of the
+    /// colour charges cᵢ·cⱼ: the loop loads them only if so (zeros otherwise), and the dual-number
+    /// tests, which give random masses, charges and colours, catch a wrong `false`.
+    const BODIES: bool = false;
+    const COLOUR: bool = false;
+    fn eval(r: &Self::Row, d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str>;
 }
 
 /// The force on one body and its energy, from its position, velocity, mass and charge.
@@ -129,6 +137,7 @@ pub fn group(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn
 
 /// A central pair potential V(r) on the displacement d = xⱼ − xᵢ: `vr(r)` gives (V, dV/dr);
 /// the force on i is dV/dr · d/r.
+#[inline(always)]
 pub(crate) fn central(d: [f64; 3], vr: impl Fn(f64) -> (f64, f64)) -> Result<([f64; 3], f64), &'static str> {
     let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     if r == 0.0 {

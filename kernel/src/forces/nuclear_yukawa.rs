@@ -6,7 +6,13 @@ use super::Paired;
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+    /// g and λ.
+    type Row = [f64; 2];
+    fn row(p: &[f64]) -> [f64; 2] {
+        [p[0], p[1]]
+    }
+    #[inline(always)]
+    fn eval(p: &[f64; 2], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         screened(-p[0], p[1], d)
     }
 }

@@ -5,7 +5,14 @@ use super::{central, Paired};
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str> {
+    /// α and σ.
+    type Row = [f64; 2];
+    const COLOUR: bool = true;
+    fn row(p: &[f64]) -> [f64; 2] {
+        [p[0], p[1]]
+    }
+    #[inline(always)]
+    fn eval(p: &[f64; 2], d: [f64; 3], _: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str> {
         let (alpha, sigma) = (p[0], p[1]);
         central(d, |r| (colour * (4.0 * alpha / r - 3.0 * sigma * r), -colour * (4.0 * alpha / (r * r) + 3.0 * sigma)))
     }

@@ -1,17 +1,19 @@
 //! WCA: Lennard-Jones + ε inside 2^{1/6}σ, nothing beyond.
 
-use super::lennard_jones::{cut, lj};
+use super::lennard_jones::Lj;
 use super::Paired;
 use lagra_checker::terms::wca::MINIMUM;
 
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        cut(d, MINIMUM * p[1], |r2| {
-            let (v, s) = lj(p[0], p[1], r2);
-            (v + p[0], s)
-        })
+    type Row = Lj;
+    fn row(p: &[f64]) -> Lj {
+        Lj::new(p[0], p[1], MINIMUM * p[1], -p[0])
+    }
+    #[inline(always)]
+    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        lj.shifted(d)
     }
 }
 

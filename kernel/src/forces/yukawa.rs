@@ -5,12 +5,20 @@ use super::{central, Paired};
 pub struct Fast;
 
 impl Paired for Fast {
-    fn eval(p: &[f64], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+    /// k and λ.
+    type Row = [f64; 2];
+    const BODIES: bool = true;
+    fn row(p: &[f64]) -> [f64; 2] {
+        [p[0], p[1]]
+    }
+    #[inline(always)]
+    fn eval(p: &[f64; 2], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         screened(p[0] * qi * qj, p[1], d)
     }
 }
 
 /// V = a e^{−r/λ}/r, dV/dr = −V (1/λ + 1/r).
+#[inline(always)]
 pub(crate) fn screened(a: f64, range: f64, d: [f64; 3]) -> Result<([f64; 3], f64), &'static str> {
     central(d, |r| {
         let v = a * (-r / range).exp() / r;
