@@ -1,0 +1,140 @@
+//! Criterion benches: the kernel's force loop per term kind, the neighbour-list build, the
+//! checker's enclosure per atom, and whole runs end to end. `cargo bench --bench kernel`;
+//! `-- forces/` (a name filter) runs one group. Timings are per body (throughput), so kinds
+//! and sizes compare.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
+use lagra_checker::monitor::Monitor;
+use lagra_checker::terms::{Kind, Shape};
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::lang::compile;
+use lagra_kernel::neighbours::Neighbours;
+use lagra_kernel::run::{run, Options};
+use lagra_kernel::scene::Scene;
+use lagra_kernel::state::State;
+use std::hint::black_box;
+
+/// `k³` bodies on a cubic lattice of spacing 1.1, slightly disordered, with unit masses,
+/// alternating charges and colours.
+fn lattice(k: usize) -> (Vec<Body>, Vec<[f64; 3]>) {
+    let n = k * k * k;
+    let bodies = (0..n)
+        .map(|i| Body { mass: 1.0, charge: if i % 2 == 0 { 1.0 } else { -1.0 }, colour: [0.5, 0.3 - 0.1 * (i % 3) as f64] })
+        .collect();
+    let x = (0..n)
+        .map(|i| {
+            let c = [i % k, (i / k) % k, i / (k * k)];
+            std::array::from_fn(|a| 1.1 * c[a] as f64 + 0.01 * ((i * 7 + a * 13) % 11) as f64)
+        })
+        .collect();
+    (bodies, x)
+}
+
+/// One instance of every kind, on every body (fields and pair terms) or on lattice neighbours
+/// (bonds), with unit parameters but where one must be larger (FENE's R₀) or a cutoff.
+fn instance(kind: Kind, n: usize) -> Vec<TermInstance> {
+    let spec = kind.spec();
+    let params: Vec<f64> = spec
+        .params
+        .iter()
+        .flat_map(|p| {
+            let v = match p.name {
+                "R0" => 3.0,
+                "cutoff" => 2.5,
+                "r0" | "sigma" => 1.0,
+                _ => p.default.filter(|d| *d != 0.0).unwrap_or(1.0),
+            };
+            std::iter::repeat_n(v, p.len)
+        })
+        .collect();
+    match spec.shape {
+        // a staircase of lattice neighbours (x, then y, then x): bonds of 1.1, angles of 90°
+        Shape::Bond(arity) => {
+            let k = (n as f64).cbrt().round() as usize;
+            let steps = [0, 1, k + 1, k + 2];
+            (0..n)
+                .filter(|i| i % k + 3 <= k && (i / k) % k + 1 < k)
+                .map(|i| TermInstance { kind, sites: steps[..arity].iter().map(|s| i + s).collect(), params: params.clone() })
+                .collect()
+        }
+        _ => vec![TermInstance { kind, sites: vec![], params }],
+    }
+}
+
+fn forces(c: &mut Criterion) {
+    let mut group = c.benchmark_group("forces");
+    let k = 8;
+    let (bodies, x) = lattice(k);
+    let n = bodies.len();
+    group.throughput(Throughput::Elements(n as u64));
+    for &kind in Kind::ALL {
+        let model = Model { units: UnitSystem::Reduced, cell: None, bodies: bodies.clone(), terms: instance(kind, n) };
+        let graph = LagrangianGraph::new(&model);
+        let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n] };
+        let mut f = vec![[0.0; 3]; n];
+        group.bench_function(BenchmarkId::new(kind.name(), n), |b| {
+            b.iter(|| black_box(graph.forces(black_box(&s), &mut f).expect("no singularity")))
+        });
+    }
+    group.finish();
+}
+
+fn scene(path: &str) -> Scene {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/");
+    let text = std::fs::read_to_string(format!("{file}{path}")).expect("the scene");
+    compile(&text).unwrap_or_else(|d| panic!("{}", d.render(path, &text)))
+}
+
+fn neighbour_build(c: &mut Criterion) {
+    let mut group = c.benchmark_group("neighbour_build");
+    let lj = scene("bench/lj_32k.lagra");
+    group.throughput(Throughput::Elements(lj.x0.len() as u64));
+    group.sample_size(20);
+    group.bench_function("lj_32k", |b| {
+        b.iter(|| {
+            let mut list = Neighbours::new(&lj.model.cell, 2.5).expect("a box that takes a list");
+            list.update(black_box(&lj.x0), &lj.model.cell);
+            black_box(list.count())
+        })
+    });
+    group.finish();
+}
+
+/// The checker's enclosure of the energy (and momentum) at one checkpoint: the reference state,
+/// the costliest a run shows it.
+fn checker(c: &mut Criterion) {
+    let mut group = c.benchmark_group("checker");
+    group.sample_size(10);
+    for name in ["bench/lj_4k_drift.lagra", "kepler.lagra"] {
+        let s = scene(name);
+        let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone() };
+        group.throughput(Throughput::Elements(s.x0.len() as u64));
+        group.bench_function(BenchmarkId::new("reference_checkpoint", &s.name), |b| {
+            b.iter(|| {
+                let mut m = Monitor::new(s.model.clone(), s.claims.clone(), 1).expect("a valid model");
+                m.observe(black_box(&state.snapshot())).expect("no breach at the reference");
+            })
+        });
+    }
+    group.finish();
+}
+
+fn end_to_end(c: &mut Criterion) {
+    let mut group = c.benchmark_group("end_to_end");
+    group.sample_size(10);
+    for (name, steps) in [("oscillator.lagra", 5000), ("bench/lj_pair.lagra", 100_000), ("lj_liquid.lagra", 200)] {
+        let s = scene(name);
+        group.throughput(Throughput::Elements(steps));
+        group.bench_function(BenchmarkId::new("steps", &s.name), |b| {
+            b.iter(|| {
+                let opts = Options { steps: Some(steps), trace: None, record: None, threads: 1 };
+                black_box(run(&s, opts).expect("the run").steps)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, forces, neighbour_build, checker, end_to_end);
+criterion_main!(benches);
