@@ -2,7 +2,9 @@
 
 mod bench;
 mod check;
+mod lean;
 mod list;
+mod noether;
 mod report;
 mod run;
 mod terms;
@@ -39,6 +41,12 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
     List(list::Args),
     /// Print the vocabulary of terms: name, how it is written, parameters and dimensions.
     Terms,
+    /// Write Lean 4: a certificate's certified claims as theorems over its exact checkpoint
+    /// values, or (--definitions) the term definitions and their invariance theorems.
+    Lean(lean::Args),
+    /// What a scene's symmetries conserve (Noether's theorem, from the derived table), and which
+    /// term breaks each of the others.
+    Noether(noether::Args),
     /// Studies of speed and accuracy (`lagra bench precision`: run time against error).
     Bench(bench::Args),
 }
@@ -50,5 +58,7 @@ fn main() -> ExitCode {
         Command::List(args) => list::main(args),
         Command::Terms => terms::main(),
         Command::Bench(args) => bench::main(args),
+        Command::Lean(args) => lean::main(args),
+        Command::Noether(args) => noether::main(args),
     }
 }

@@ -49,6 +49,10 @@ pub struct Summary {
     pub predictions: Vec<Measured>,
     /// Why the run stopped early, if it did.
     pub halted: Option<String>,
+    /// How many claims `@expect noether` generated (they are among `claims`).
+    pub generated: usize,
+    /// What Noether's theorem says of a failed claim.
+    pub notes: Vec<String>,
     pub passed: bool,
 }
 
@@ -96,6 +100,8 @@ impl Summary {
             claims,
             predictions: r.predictions.clone(),
             halted,
+            generated: 0,
+            notes: vec![],
             passed,
         }
     }
@@ -127,8 +133,14 @@ impl Summary {
                 let _ = writeln!(s, "plan        {kind}: {plan}");
             }
         }
+        if self.generated > 0 {
+            let _ = writeln!(s, "noether     {} claim(s) from the scene's symmetries (`lagra noether FILE` says which)", self.generated);
+        }
         for c in &self.claims {
             let _ = writeln!(s, "{}", c.line);
+        }
+        for n in &self.notes {
+            let _ = writeln!(s, "noether     {n}");
         }
         for p in &self.predictions {
             let verdict = if p.agrees { "agrees" } else { "DISAGREES" };

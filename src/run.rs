@@ -1,6 +1,7 @@
 //! `lagra run FILE`.
 
-use crate::report;
+use crate::{noether, report};
+use lagra_checker::decision::Verdict;
 use lagra_checker::certificate::{self, Certificate};
 use lagra_checker::checksum::label;
 use lagra_checker::model::Snapshot;
@@ -40,6 +41,10 @@ pub struct Args {
     /// Print how each term group visits its bodies (every pair, cell list, Verlet list, chunks).
     #[arg(long)]
     explain: bool,
+    /// Refuse (exit 2) a scene that declares a claim its symmetries cannot support (momentum
+    /// along a floor's normal); without it that is a warning.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// Bad input: the message on stderr, exit code 2.
@@ -54,13 +59,18 @@ pub fn main(a: Args) -> ExitCode {
         Ok(s) => s,
         Err(e) => return bad(format!("cannot read {path}: {e}")),
     };
-    let scene = match compile(&source) {
+    let mut scene = match compile(&source) {
         Ok(s) => s,
         Err(d) => {
             eprintln!("{}", d.render(&path, &source));
             return ExitCode::from(2);
         }
     };
+    let (analysis, warnings, generated) = noether::apply(&mut scene, &path, &source);
+    warnings.iter().for_each(|w| eprintln!("{w}"));
+    if a.strict && !warnings.is_empty() {
+        return bad("--strict: a declared claim contradicts the scene's symmetries (see above)");
+    }
     if a.steps == Some(0) {
         return bad("--steps must be at least 1");
     }
@@ -100,7 +110,15 @@ pub fn main(a: Args) -> ExitCode {
         Ok(sum) => sum.map(label),
         Err(e) => return bad(format!("writing the state file: {e}")),
     };
-    let summary = report::Summary::new(&path, &scene, &rep, a.threads, a.explain);
+    let mut summary = report::Summary::new(&path, &scene, &rep, a.threads, a.explain);
+    summary.generated = generated;
+    summary.notes = scene
+        .claims
+        .iter()
+        .zip(&summary.claims)
+        .filter(|(_, line)| matches!(line.verdict, Verdict::Fail(_)))
+        .filter_map(|(c, _)| noether::note(&analysis, c))
+        .collect();
     if let Some(c) = &a.certificate {
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {

@@ -158,8 +158,8 @@ fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model) -> Vec<E> {
     };
     match c.kind {
         ClaimKind::EnergyConservation => vec![q.energy(model)],
-        ClaimKind::MomentumConservation => axes(q.momentum()),
-        ClaimKind::AngularMomentumConservation => axes(q.angular_momentum()),
+        ClaimKind::MomentumConservation => axes(q.momentum(model)),
+        ClaimKind::AngularMomentumConservation => axes(q.angular_momentum(model)),
         ClaimKind::Distance => {
             c.between.as_ref().map(|b| vec![q.distance(b.bodies[0], b.bodies[1])]).unwrap_or_default()
         }

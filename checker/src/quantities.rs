@@ -125,17 +125,35 @@ impl<R: Real> Lifted<R> {
         norm2(&sub3(&self.seen_from(i, j).x, &self.sites[i].x)).sqrt()
     }
 
-    pub fn momentum(&self) -> Vec3<R> {
-        std::array::from_fn(|c| self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone()))
+    /// Σ m v, plus the share of any term with one (a magnetic field's q B × x): Noether's
+    /// charge of translations.
+    pub fn momentum(&self, model: &Model) -> Vec3<R> {
+        let free = std::array::from_fn(|c| self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone()));
+        self.with_shares(model, free, 0)
     }
 
-    pub fn angular_momentum(&self) -> Vec3<R> {
-        std::array::from_fn(|c| {
+    /// Σ m x × v, plus the terms' shares: Noether's charge of rotations about the origin.
+    pub fn angular_momentum(&self, model: &Model) -> Vec3<R> {
+        let free = std::array::from_fn(|c| {
             let (a, b) = ((c + 1) % 3, (c + 2) % 3);
             self.sites.iter().fold(self.zero.clone(), |acc, s| {
                 acc + s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
             })
-        })
+        });
+        self.with_shares(model, free, 1)
+    }
+
+    /// `charge` plus share `which` (0 momentum, 1 angular momentum) of every instance of a kind
+    /// that has one.
+    fn with_shares(&self, model: &Model, charge: Vec3<R>, which: usize) -> Vec3<R> {
+        let mut charge = charge;
+        self.each_instance(model, |t| t.kind.has_charge_share(), |n, s| {
+            if let Some(share) = model.terms[n].kind.charge_share(&self.params[n], s) {
+                let [a, b, c] = &share[which];
+                charge = [charge[0].clone() + a.clone(), charge[1].clone() + b.clone(), charge[2].clone() + c.clone()];
+            }
+        });
+        charge
     }
 }
 
@@ -153,12 +171,13 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
-                Body { mass: 2.5, charge: 0.0, colour: [0.0; 2] },
-                Body { mass: 0.5, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 1.0, charge: 1.0, colour: [0.0; 2] },
+                Body { mass: 2.5, charge: -0.5, colour: [0.0; 2] },
+                Body { mass: 0.5, charge: 2.0, colour: [0.0; 2] },
             ],
             terms: vec![
                 TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![k, r0, gamma] },
+                TermInstance { kind: Kind::MagneticField, sites: vec![], params: vec![0.3, -0.2, 1.1] },
                 TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -g, 0.0] },
                 TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.7] },
             ],
@@ -184,8 +203,8 @@ mod tests {
             };
             prop_assert!(inside(iv.energy(&m), hp.energy(&m)));
             prop_assert!(inside(iv.dissipated_power(&m), hp.dissipated_power(&m)));
-            for (a, b) in iv.momentum().into_iter().zip(hp.momentum()) { prop_assert!(inside(a, b)); }
-            for (a, b) in iv.angular_momentum().into_iter().zip(hp.angular_momentum()) { prop_assert!(inside(a, b)); }
+            for (a, b) in iv.momentum(&m).into_iter().zip(hp.momentum(&m)) { prop_assert!(inside(a, b)); }
+            for (a, b) in iv.angular_momentum(&m).into_iter().zip(hp.angular_momentum(&m)) { prop_assert!(inside(a, b)); }
             // and the enclosure is tight: a few ulps of the energy's scale
             let e = iv.energy(&m);
             prop_assert!(e.wid() <= 1e-12 * e.mag().max(1.0));

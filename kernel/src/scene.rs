@@ -3,6 +3,7 @@
 
 use crate::predict::Prediction;
 use crate::solvers::Integrator;
+use crate::lang::Span;
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 
@@ -12,6 +13,16 @@ pub struct Solver {
     pub dt: f64,
     pub steps: u64,
     pub steps_per_frame: u64,
+}
+
+/// `@expect noether { tol, every }`: every conservation law the scene's symmetries imply, as
+/// claims (the front derives them: the kernel knows no Noether table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoetherRequest {
+    pub at: Span,
+    /// The relative energy tolerance of the generated energy claim.
+    pub tol: Option<f64>,
+    pub every: u64,
 }
 
 #[derive(Clone, Debug)]
@@ -26,6 +37,9 @@ pub struct Scene {
     /// Display size of each body (from `size` or its type); not part of the physics.
     pub sizes: Vec<f64>,
     pub claims: Vec<Claim>,
+    /// Where each of `claims` was declared.
+    pub claim_spans: Vec<Span>,
+    pub noether: Option<NoetherRequest>,
     pub predictions: Vec<Prediction>,
     pub solver: Solver,
 }

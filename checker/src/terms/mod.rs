@@ -98,6 +98,13 @@ pub trait Definition {
     fn gyroscopic<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
         None
     }
+    /// The term's share of the conserved momentum and angular momentum, beyond Σ m v and
+    /// Σ m x × v: where L has a part linear in the velocities, Noether's charges of translations
+    /// and rotations take it in (a magnetic field's q B × x). `lagra-noether-derive` derives it
+    /// from `gyroscopic`; a test holds the two equal.
+    fn charge_share<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<[Vec3<R>; 2]> {
+        None
+    }
     /// Whether an instance with parameters `p` can remove energy at all (a bond with zero
     /// damping cannot): the energy claim is a balance exactly when some instance can.
     fn dissipates(_p: &[f64]) -> bool {
@@ -135,6 +142,9 @@ macro_rules! vocabulary {
             }
             pub fn gyroscopic<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
                 match self { $(Kind::$kind => $kind::gyroscopic(p, s)),* }
+            }
+            pub fn charge_share<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<[Vec3<R>; 2]> {
+                match self { $(Kind::$kind => $kind::charge_share(p, s)),* }
             }
             pub fn dissipates(self, p: &[f64]) -> bool {
                 match self { $(Kind::$kind => $kind::dissipates(p)),* }
@@ -179,8 +189,9 @@ impl Kind {
 
     /// The definition evaluated over dimensions: parameters carry their declared dimension,
     /// sites carry L, L·T⁻¹, M, Q. Returns the potential and, where the term has them, the
-    /// dissipation function, the dissipated power and the velocity-dependent Lagrangian.
-    fn dimensions(self) -> [Option<Dimension>; 4] {
+    /// dissipation function, the dissipated power, the velocity-dependent Lagrangian and the
+    /// shares of the momentum and angular momentum.
+    fn dimensions(self) -> [Option<Dimension>; 6] {
         let spec = self.spec();
         let p: Vec<Dimension> =
             spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
@@ -192,7 +203,16 @@ impl Kind {
             colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
         };
         let s = vec![&site; spec.shape.arity()];
-        [Some(self.potential(&p, &s)), self.rayleigh(&p, &s), self.power(&p, &s), self.gyroscopic(&p, &s)]
+        // a vector is homogeneous when its components are alike: their sum says so
+        let sum = |v: Vec3<Dimension>| { let [a, b, c] = v; a + b + c };
+        let [momentum, angular] = self.charge_share(&p, &s).map(|[m, a]| [Some(sum(m)), Some(sum(a))]).unwrap_or([None, None]);
+        [Some(self.potential(&p, &s)), self.rayleigh(&p, &s), self.power(&p, &s), self.gyroscopic(&p, &s), momentum, angular]
+    }
+
+    /// Whether the definition has a share of the momenta (worked out once per kind).
+    pub fn has_charge_share(self) -> bool {
+        static TABLE: OnceLock<Vec<bool>> = OnceLock::new();
+        TABLE.get_or_init(|| Kind::ALL.iter().map(|k| k.dimensions()[4].is_some()).collect())[self as usize]
     }
 
     /// Whether the definition has a dissipation function (worked out once per kind).
@@ -210,6 +230,8 @@ impl Kind {
             ("dissipation function", power),
             ("dissipated power", power),
             ("velocity-dependent Lagrangian", Dim::ENERGY),
+            ("share of the momentum", Dim([1, 1, -1, 0])),
+            ("share of the angular momentum", Dim([1, 2, -1, 0])),
         ];
         for ((what, want), got) in wanted.into_iter().zip(self.dimensions()) {
             match got.map(|g| g.0) {

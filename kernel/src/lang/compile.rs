@@ -6,7 +6,7 @@ use super::diagnostic::{Diagnostic, Span};
 use super::lattice::{self, Packing};
 use super::{Pair, Rule};
 use crate::predict::{Prediction, PredictionKind};
-use crate::scene::{Scene, Solver};
+use crate::scene::{NoetherRequest, Scene, Solver};
 use crate::solvers::Integrator;
 use lagra_checker::claims::{Between, Claim, ClaimKind};
 use lagra_checker::model::{Body, Cell, Model, TermInstance, UnitSystem};
@@ -47,6 +47,8 @@ struct Compiler<'a> {
     /// Where each bond's indices were written, checked once all entities are known.
     indices: Vec<Vec<(usize, Span)>>,
     claims: Vec<Claim>,
+    claim_spans: Vec<Span>,
+    noether: Option<NoetherRequest>,
     predictions: Vec<(PredictionKind, Option<f64>, Span)>,
     solver: Option<Solver>,
     cell: Option<(Cell, Span)>,
@@ -86,6 +88,8 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         terms: vec![],
         indices: vec![],
         claims: vec![],
+        claim_spans: vec![],
+        noether: None,
         predictions: vec![],
         solver: None,
         cell: None,
@@ -391,8 +395,11 @@ impl<'a> Compiler<'a> {
 
     fn expect(&mut self, name: Pair, mut b: Block) -> Result<(), Diagnostic> {
         let at: Span = name.as_span().into();
+        if name.as_str() == "noether" {
+            return self.noether(at, b);
+        }
         let kind = ClaimKind::from_name(name.as_str()).ok_or_else(|| {
-            let known: Vec<_> = ClaimKind::ALL.iter().map(|k| k.name()).collect();
+            let known: Vec<_> = ClaimKind::ALL.iter().map(|k| k.name()).chain(["noether"]).collect();
             Diagnostic::new(at, format!("unknown claim `{}`; known claims: {}", name.as_str(), known.join(", ")))
         })?;
         if !kind.repeatable() && self.claims.iter().any(|c| c.kind == kind) {
@@ -447,6 +454,19 @@ impl<'a> Compiler<'a> {
         }
         b.check_names(owner, &allowed)?;
         self.claims.push(claim);
+        self.claim_spans.push(at);
+        Ok(())
+    }
+
+    /// `@expect noether { tol, every }`.
+    fn noether(&mut self, at: Span, mut b: Block) -> Result<(), Diagnostic> {
+        if self.noether.is_some() {
+            return err(at, "noether is declared twice");
+        }
+        let tol = b.take("tol").map(|f| self.rd.positive(&f, "noether", Dim::NONE)).transpose()?;
+        let every = b.take("every").map(|f| self.rd.count(&f, "noether")).transpose()?.unwrap_or(1);
+        b.check_names("noether", &["tol", "every"])?;
+        self.noether = Some(NoetherRequest { at, tol, every });
         Ok(())
     }
 
@@ -513,6 +533,8 @@ impl<'a> Compiler<'a> {
             v0: self.v0,
             sizes: self.sizes,
             claims: self.claims,
+            claim_spans: self.claim_spans,
+            noether: self.noether,
             predictions,
             solver,
         })

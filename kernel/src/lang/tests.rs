@@ -48,7 +48,7 @@ fn unknown_keyword() {
         error("bond harmonic", "bond spring"),
         at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral, hbond")
     );
-    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance"));
+    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance, noether"));
 }
 
 #[test]

@@ -1,0 +1,3 @@
+import Lagra.Basic
+import Lagra.Terms
+import Lagra.Invariance
