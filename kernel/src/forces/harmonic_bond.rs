@@ -12,8 +12,10 @@ impl Bonded<2> for Fast {
         if r == 0.0 {
             return Err("at the same point, where the bond's direction is undefined");
         }
-        let rdot: f64 = (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() / r;
-        let s = (k * (r - r0) + gamma * rdot) / r;
+        // one division per bond; the damping's ṙ only where there is damping
+        let inv = 1.0 / r;
+        let damping = if gamma == 0.0 { 0.0 } else { gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv };
+        let s = (k * (r - r0) + damping) * inv;
         let a = d.map(|c| c * s);
         Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))
     }
