@@ -42,6 +42,8 @@ pub struct Summary {
     pub threads: usize,
     /// How each term group visited its bodies: `[kind, plan]`.
     pub plan: Vec<(&'static str, String)>,
+    /// Where the checker ran.
+    pub checker: &'static str,
     /// Print the plan in the text report too (`--explain`).
     #[serde(skip)]
     explain: bool,
@@ -96,6 +98,7 @@ impl Summary {
             ns_per_atom_step: r.wall_s * 1e9 / atom_steps,
             threads,
             plan: r.plan.iter().map(|(k, p)| (k.name(), p.clone())).collect(),
+            checker: r.checker,
             explain,
             claims,
             predictions: r.predictions.clone(),
@@ -132,6 +135,7 @@ impl Summary {
             for (kind, plan) in &self.plan {
                 let _ = writeln!(s, "plan        {kind}: {plan}");
             }
+            let _ = writeln!(s, "plan        checker: {}", self.checker);
         }
         if self.generated > 0 {
             let _ = writeln!(s, "noether     {} claim(s) from the scene's symmetries (`lagra noether FILE` says which)", self.generated);

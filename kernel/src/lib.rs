@@ -2,6 +2,7 @@
 //! run loop. Nothing here is trusted: the checker re-evaluates every claim on the exact states
 //! this crate produces.
 
+pub mod checking;
 pub mod forces;
 pub mod graph;
 pub mod lang;

@@ -2,6 +2,7 @@
 //! the predictions, write the trace. A certified failure, a singular force or a non-finite
 //! state halts the run at that step.
 
+use crate::checking::{can_overlap, Checking};
 use crate::graph::LagrangianGraph;
 use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
@@ -47,6 +48,8 @@ pub struct Report {
     pub state: State,
     /// How each term group visited its bodies (with the neighbour-list builds, after the run).
     pub plan: Vec<(Kind, String)>,
+    /// Where the checker ran: inline, or on a second thread overlapping the kernel.
+    pub checker: &'static str,
 }
 
 /// Keeps the states a run produces (the state file's writer).
@@ -77,13 +80,15 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
-    let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
+    let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
     let mut state = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
     let mut meters: Vec<(Meter, &Prediction)> =
         scene.predictions.iter().map(|p| (Meter::new(p, &scene.model), p)).collect();
+    let watched = opts.trace.is_some() || opts.record.is_some() || !meters.is_empty();
+    let overlap = can_overlap(&scene.model, &scene.claims, watched);
 
     let start = Instant::now();
-    let mut stop: Option<Stop>;
+    let mut stop: Option<Stop> = None;
     let mut trace = |s: &State, potential: f64| -> Result<(), String> {
         if let Some(w) = opts.trace.as_mut() {
             let line =
@@ -93,41 +98,58 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         }
         Ok(())
     };
-    // Every state the run produces is recorded and shown to the checker, in order.
-    let mut check = |s: &State| -> Result<Option<Stop>, String> {
-        if let Some(r) = opts.record.as_mut() {
+    // Every state the run produces is recorded and shown to the checker, in order; a breach
+    // (found at this state, or, overlapped, at the checkpoint before) replaces the run's state.
+    let mut record = opts.record.take();
+    let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
+        if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
         }
-        Ok(monitor.observe(&s.snapshot()).err().map(Stop::Checker))
+        Ok(checking.show(s).err().map(|(halt, at)| {
+            *s = at;
+            Stop::Checker(halt)
+        }))
     };
     // The checker's own test of a state (sizes, finiteness), for when no claim looks at it.
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
-    match Stepper::new(scene.solver.integrator, &graph, &state) {
-        Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
-        Ok(mut solver) => {
-            stop = check(&state)?;
-            meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-            trace(&state, solver.potential())?;
-            while stop.is_none() && state.step < steps {
-                if let Err(e) = solver.step(&graph, &mut state, dt) {
-                    stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
-                    break;
+    let monitor = std::thread::scope(|scope| -> Result<Monitor, String> {
+        let mut checking = if overlap {
+            Checking::overlapped(scope, monitor, &scene.claims, steps)
+        } else {
+            Checking::Inline(monitor)
+        };
+        match Stepper::new(scene.solver.integrator, &graph, &state) {
+            Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
+            Ok(mut solver) => {
+                stop = check(&mut checking, &mut state)?;
+                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
+                trace(&state, solver.potential())?;
+                while stop.is_none() && state.step < steps {
+                    if let Err(e) = solver.step(&graph, &mut state, dt) {
+                        stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
+                        break;
+                    }
+                    stop = check(&mut checking, &mut state)?;
+                    if stop.is_none() && !solver.potential().is_finite() {
+                        stop = non_finite(&state);
+                    }
+                    meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
+                    if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
+                        trace(&state, solver.potential())?;
+                    }
                 }
-                stop = check(&state)?;
-                if stop.is_none() && !solver.potential().is_finite() {
+                if stop.is_none() {
                     stop = non_finite(&state);
                 }
-                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-                if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
-                    trace(&state, solver.potential())?;
-                }
-            }
-            if stop.is_none() {
-                stop = non_finite(&state);
             }
         }
-    }
+        // a breach at the checkpoint still being judged came first
+        if let Err((halt, at)) = checking.settle() {
+            (stop, state) = (Some(Stop::Checker(halt)), at);
+        }
+        Ok(checking.into_monitor())
+    })?;
     let wall_s = start.elapsed().as_secs_f64();
     let predictions = meters
         .iter()
@@ -156,5 +178,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         predictions,
         state,
         plan,
+        checker: if overlap {
+            "on a second thread, judging checkpoint k while the kernel steps to k + 1"
+        } else {
+            "inline, at every checkpoint"
+        },
     })
 }

@@ -1,0 +1,159 @@
+//! How the run hands states to the checker: inline, or on a second thread that judges checkpoint
+//! k while the kernel steps towards k + 1. Both give the same report, bit for bit: the kernel
+//! never passes checkpoint k + 1 before checkpoint k is judged, and a breach at k reports the
+//! state at k, however far the kernel got.
+
+use crate::state::State;
+use lagra_checker::claims::Claim;
+use lagra_checker::model::Model;
+use lagra_checker::monitor::{is_balance, Halt, Monitor};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::thread::{Scope, ScopedJoinHandle};
+
+/// From this many bodies a checkpoint costs enough (an interval sum over every pair) to be worth
+/// a thread; below it the hand-over would cost more than the checking.
+const OVERLAP_FROM: usize = 1024;
+
+/// Whether a run may check on a second thread: a big scene whose checker looks only at its
+/// checkpoints (an energy balance integrates over every step), and nothing else that sees the
+/// states past a breach before it is known (a trace, a state file, the predictions' meters).
+pub fn can_overlap(model: &Model, claims: &[Claim], watched: bool) -> bool {
+    !watched && model.bodies.len() >= OVERLAP_FROM && !is_balance(model, claims)
+}
+
+/// A breach, with the state it was found at.
+pub type Breach = (Halt, State);
+
+pub enum Checking<'s> {
+    Inline(Monitor),
+    Overlapped(Overlap<'s>),
+}
+
+pub struct Overlap<'s> {
+    states: SyncSender<State>,
+    verdicts: Receiver<Result<(), Breach>>,
+    /// A checkpoint handed over whose verdict has not been read.
+    pending: bool,
+    /// The steps the checker looks at (it returns at once from the others).
+    due: Box<dyn Fn(u64) -> bool + Send + 's>,
+    thread: ScopedJoinHandle<'s, Monitor>,
+}
+
+impl<'s> Checking<'s> {
+    /// The monitor on a second thread of `scope`, judging the states due for `claims`.
+    pub fn overlapped<'e>(scope: &'s Scope<'s, 'e>, mut monitor: Monitor, claims: &[Claim], last: u64) -> Self {
+        let every: Vec<u64> = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
+        let due = Box::new(move |step: u64| step == 0 || step == last || every.iter().any(|&e| step.is_multiple_of(e)));
+        let (states, inbox) = sync_channel::<State>(1);
+        let (outbox, verdicts) = sync_channel(1);
+        let thread = scope.spawn(move || {
+            for s in inbox {
+                let verdict = monitor.observe(&s.snapshot()).map_err(|h| (h, s));
+                if outbox.send(verdict).is_err() {
+                    break;
+                }
+            }
+            monitor
+        });
+        Checking::Overlapped(Overlap { states, verdicts, pending: false, due, thread })
+    }
+
+    /// Shows the checker a state. Inline, the answer is about this state; overlapped, it is
+    /// about the checkpoint before, and a breach comes with that checkpoint's state.
+    pub fn show(&mut self, s: &State) -> Result<(), Breach> {
+        match self {
+            Checking::Inline(m) => m.observe(&s.snapshot()).map_err(|h| (h, s.clone())),
+            Checking::Overlapped(o) if (o.due)(s.step) => {
+                o.settle()?;
+                o.states.send(s.clone()).expect("the checker thread takes states until the run ends");
+                o.pending = true;
+                Ok(())
+            }
+            Checking::Overlapped(_) => Ok(()),
+        }
+    }
+
+    /// Waits for the verdict of the checkpoint handed over last, if any.
+    pub fn settle(&mut self) -> Result<(), Breach> {
+        match self {
+            Checking::Inline(_) => Ok(()),
+            Checking::Overlapped(o) => o.settle(),
+        }
+    }
+
+    /// The monitor, every verdict read.
+    pub fn into_monitor(self) -> Monitor {
+        match self {
+            Checking::Inline(m) => m,
+            Checking::Overlapped(o) => {
+                drop(o.states);
+                drop(o.verdicts);
+                o.thread.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            }
+        }
+    }
+}
+
+impl Overlap<'_> {
+    fn settle(&mut self) -> Result<(), Breach> {
+        if !std::mem::take(&mut self.pending) {
+            return Ok(());
+        }
+        self.verdicts.recv().expect("the checker thread answers every state it is handed")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::lang::compile;
+    use crate::run::{run, Options, Report, Stop};
+
+    /// 1,372 LJ atoms, energy and momentum checked every 10 steps; `tol` decides whether the
+    /// energy claim breaks part-way.
+    fn melt(tol: f64) -> crate::scene::Scene {
+        compile(&format!(
+            "scene m {{ entity atom {{ mass: 1 }}
+               lattice {{ type: atom, density: 0.8442, cells: [7, 7, 7], temperature: 1.44, seed: 3 }}
+               interaction lj_shifted {{ epsilon: 1, sigma: 1, cutoff: 2.5 }}
+               @expect energy_conservation {{ tol: {tol}, every: 10 }}
+               @expect momentum_conservation {{ every: 10 }}
+               solver {{ dt: 0.005, steps: 60 }} }}"
+        ))
+        .unwrap()
+    }
+
+    /// A run with a trace cannot overlap (the trace would show states past a breach): the
+    /// reference, inline.
+    fn both(scene: &crate::scene::Scene) -> (Report, Report) {
+        let overlapped = run(scene, Options { steps: None, trace: None, record: None, threads: 1 }).unwrap();
+        let mut sink = std::io::sink();
+        let inline = run(scene, Options { steps: None, trace: Some(&mut sink), record: None, threads: 1 }).unwrap();
+        assert!(overlapped.checker.starts_with("on a second thread") && inline.checker.starts_with("inline"));
+        (overlapped, inline)
+    }
+
+    fn same(a: &Report, b: &Report) {
+        assert_eq!((a.steps, &a.stop), (b.steps, &b.stop));
+        assert_eq!(a.state.step, b.state.step);
+        let bits = |r: &Report| r.state.x.iter().chain(&r.state.v).flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+        assert!(bits(a) == bits(b));
+        assert_eq!(format!("{:?}", a.outcome.verdicts), format!("{:?}", b.outcome.verdicts));
+        let trails = |r: &Report| serde_json::to_string(&r.outcome.trails).unwrap();
+        assert_eq!(trails(a), trails(b));
+    }
+
+    #[test]
+    fn overlapped_checking_reports_what_inline_checking_does() {
+        let (a, b) = both(&melt(1e-3));
+        assert!(a.stop.is_none() && a.steps == 60);
+        same(&a, &b);
+    }
+
+    /// A breach at checkpoint k halts at k with k's state, though the kernel went on to k + 10.
+    #[test]
+    fn a_breach_found_on_the_second_thread_halts_at_its_own_step() {
+        let (a, b) = both(&melt(1e-9));
+        assert!(matches!(a.stop, Some(Stop::Checker(_))) && a.steps < 60 && a.steps % 10 == 0, "{:?}", a.stop);
+        same(&a, &b);
+    }
+}
