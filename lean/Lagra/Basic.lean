@@ -105,4 +105,18 @@ theorem Mark.bounds (m : Mark) (h : m.ok = true) (x : Rat) (hx : x ≤ m.hi) : x
 theorem Mark.all_ok {l : List Mark} (h : l.all Mark.ok = true) : ∀ m ∈ l, m.hi ≤ m.tol :=
   fun m hm => m.ok_le (List.all_eq_true.mp h m hm)
 
+/-- One more chunk of checkpoints, decided `Mark.ok`, in front of chunks that were: how the
+generated files join their chunks, one term per chunk (no search, no rewriting). -/
+theorem Mark.chunk {l : List Mark} {ls : List (List Mark)} (h : l.all Mark.ok = true)
+    (hs : ls.all (fun l => l.all Mark.ok) = true) : (l :: ls).all (fun l => l.all Mark.ok) = true := by
+  simp only [List.all_cons, h, hs, Bool.and_self]
+
+/-- Chunks every checkpoint of which was decided `Mark.ok` hold at every checkpoint of the
+trail they make up. -/
+theorem Mark.flatten_ok {ls : List (List Mark)} (h : ls.all (fun l => l.all Mark.ok) = true) :
+    ∀ m ∈ ls.flatten, m.hi ≤ m.tol := by
+  intro m hm
+  obtain ⟨l, hl, hml⟩ := List.mem_flatten.mp hm
+  exact Mark.all_ok (List.all_eq_true.mp h l hl) m hml
+
 end Lagra
