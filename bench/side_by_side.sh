@@ -20,6 +20,10 @@ json() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.arg
 
 echo "LJ 32k, LAMMPS" >&2
 cp "$peers"/*.lmp "$work"/
+# bench/in.lj rebuilds its list every 20 steps unchecked; Lagra rebuilds when displacements
+# could have brought a pair inside the cutoff. LAMMPS again with a checked list, checked every step:
+sed 's/^neigh_modify.*/neigh_modify    delay 0 every 1 check yes/' "$work/w1.lmp" > "$work/w1check.lmp"
+(cd "$work" && taskset -c 0 lmp -in w1check.lmp -var n 20 -sf opt -log w1check.log -screen none)
 (cd "$work" && taskset -c 0 lmp -in w1.lmp -var n 20 -log w1.log -screen none \
   && taskset -c 0 lmp -in w1.lmp -var n 20 -sf opt -log w1opt.log -screen none \
   && taskset -c 0,1 mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in w1.lmp -var n 20 -log w1mpi.log -screen none >/dev/null 2>&1 \
@@ -39,6 +43,22 @@ for cpus in 0 0,1; do
     done
   done
 done
+# inari switches the rounding mode per operation unless AVX-512 lets each instruction carry
+# its own: where the CPU has it, the checker's cost again with a binary built for it
+avx512=no
+if grep -qw avx512f /proc/cpuinfo && grep -qw avx512bw /proc/cpuinfo && grep -qw avx512vl /proc/cpuinfo; then
+  avx512=yes
+  echo "checker overhead, AVX-512 build (target/avx512)" >&2
+  CARGO_TARGET_DIR=$root/target/avx512 RUSTFLAGS="-C target-feature=+fma,+avx512f,+avx512bw,+avx512dq,+avx512vl,+avx512cd" \
+    cargo build --release -q --bin lagra
+  for cpus in 0 0,1; do
+    for s in shifted checked; do
+      taskset -c $cpus "$root/target/avx512/release/lagra" run scenes/bench/lj_32k_$s.lagra --json > "$out/avx512_${s}_${cpus/,/}_100.json"
+    done
+  done
+fi
+echo "summation" >&2
+taskset -c 0 "$lagra" bench summation --json > "$out/summation.json"
 echo "oscillator overhead" >&2
 taskset -c 0 "$lagra" bench overhead --json > "$out/overhead.json"
 
@@ -49,9 +69,9 @@ if [ $drift = yes ]; then
   taskset -c 0 "$lagra" run scenes/bench/lj_4k_drift.lagra --json --trace "$out/drift.jsonl" > "$out/drift.json"
 fi
 
-python3 - "$out" "$work" "$drift" <<'PY' > "$out/results.md"
+python3 - "$out" "$work" "$drift" "$avx512" <<'PY' > "$out/results.md"
 import json, sys, re
-out, work, drift = sys.argv[1], sys.argv[2], sys.argv[3] == "yes"
+out, work, drift, avx512 = sys.argv[1], sys.argv[2], sys.argv[3] == "yes", sys.argv[4] == "yes"
 j = lambda n: json.load(open(f"{out}/{n}"))
 def lammps(log):
     t = open(f"{work}/{log}").read()
@@ -67,6 +87,13 @@ print(f"| LAMMPS `lj/cut` | {ns('w1.log'):.0f} | {ns('w1mpi.log'):.0f} (MPI) |")
 print(f"| LAMMPS `-sf opt` | {opt1:.0f} | {ns('w1optmpi.log'):.0f} (MPI) |")
 print(f"| Lagra | {l1['ns_per_atom_step']:.0f} | {l2['ns_per_atom_step']:.0f} |")
 print(f"\nLagra / LAMMPS `-sf opt` on one thread: **{l1['ns_per_atom_step']/opt1:.2f}×** the time per atom-step.\n")
+builds = lambda log: int(re.search(r"Neighbor list builds = (\d+)", open(f"{work}/{log}").read())[1])
+ours = int(re.search(r"(\d+) builds", " ".join(p[1] for p in l1["plan"]))[1])
+print("Neighbour-list builds in the 100 steps: LAMMPS's bench input rebuilds every 20 steps without checking "
+      f"({builds('w1opt.log')} builds), which can miss a pair that crossed the skin; Lagra rebuilds when the two largest "
+      f"displacements since the last build could have closed the skin ({ours} builds). LAMMPS `-sf opt` with its own check "
+      f"every step (`neigh_modify delay 0 every 1 check yes`): {ns('w1check.log'):.0f} ns/atom-step, {builds('w1check.log')} builds; "
+      f"Lagra / that: **{l1['ns_per_atom_step']/ns('w1check.log'):.2f}×**.\n")
 t, s, a = lammps("w0.log"); p = j("pair.json")
 print("### Two LJ particles (per-step overhead), steps per second, higher is better\n")
 print("| LAMMPS (w0) | Lagra (lj_pair) | Lagra / LAMMPS |\n|---|---|---|")
@@ -80,6 +107,24 @@ for cpus in ["0", "01"]:
         print(f"| {len(cpus)} | {steps:,} | {u['wall_s']:.2f} s | {c['wall_s']:.2f} s | {100*(c['wall_s']/u['wall_s']-1):.0f}% |")
 verdicts = "; ".join(x["line"].replace("|", "\\|") for x in c["claims"])
 print(f"\nVerdicts of the last run: {verdicts}\n")
+if avx512:
+    print("The same 100 steps with a binary built for AVX-512 (`RUSTFLAGS=\"-C target-feature=+fma,+avx512f,+avx512bw,+avx512dq,+avx512vl,+avx512cd\"`, in `target/avx512`), where inari's interval operations set their rounding per instruction instead of switching the rounding mode around each one; the default build must run on any x86-64 with FMA, so this is opt-in:\n")
+    print("| CPUs | steps | without claims | with claims | overhead |\n|---|---|---|---|---|")
+    for cpus in ["0", "01"]:
+        u, c = j(f"avx512_shifted_{cpus}_100.json"), j(f"avx512_checked_{cpus}_100.json")
+        print(f"| {len(cpus)} | 100 | {u['wall_s']:.2f} s | {c['wall_s']:.2f} s | {100*(c['wall_s']/u['wall_s']-1):.0f}% |")
+    print()
+m = j("summation.json")
+print(f"### Compensated summation on the 32,000-atom system ({m['start']['terms']:,} energy terms)\n")
+print("Each witness's terms are evaluated once in binary64 and added three ways; the errors are against the exact sum of the same terms (MPFR, no rounding), so they are summation error alone. `drift` is the change over the run's 100 steps.\n")
+print("| witness | plain, step 0 | compensated, step 0 | exact drift | plain drift error | compensated drift error |\n|---|---|---|---|---|---|")
+for w in ["energy", "momentum_x"]:
+    a, b = m["start"][w], m["end"][w]
+    ex = b["exact"] - a["exact"]
+    print(f"| {w} | {abs(a['plain']-a['exact']):.1e} | {abs(a['compensated']-a['exact']):.1e} | {ex:.2e} | {abs(b['plain']-a['plain']-ex):.1e} | {abs(b['compensated']-a['compensated']-ex):.1e} |")
+a, b = m["start"]["momentum_x"], m["end"]["momentum_x"]
+ratio = abs(b["plain"] - a["plain"] - (b["exact"] - a["exact"])) / abs(b["exact"] - a["exact"])
+print(f"\nPlain summation's error in the change of Σ m vₓ is {ratio:.1f}× the true change{': round-off that would read as momentum drift' if ratio > 1 else ''}.\n")
 o = j("overhead.json")
 print("### Two-bead oscillator: Lagra's run loop against a hand-written velocity Verlet loop\n")
 print("| Lagra ns/step | hand loop ns/step | ratio |\n|---|---|---|")

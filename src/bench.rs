@@ -42,6 +42,15 @@ enum Study {
         #[arg(long)]
         json: bool,
     },
+    /// What compensated summation buys: the energy and momentum witnesses of the 32,000-atom LJ
+    /// benchmark summed plainly, compensated (Neumaier) and exactly, at the start and after
+    /// --steps steps.
+    Summation {
+        #[arg(long, default_value_t = 100)]
+        steps: u64,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// One problem: a scene, how long to run it, the time steps to try, and its error measure.
@@ -228,6 +237,13 @@ pub fn main(a: Args) -> ExitCode {
     let result = match a.study {
         Study::Precision { out, quick } => precision(&out, quick),
         Study::Overhead { steps, repeats, json } => overhead(steps, repeats, json),
+        Study::Summation { steps, json } => crate::summation::study(steps).and_then(|s| {
+            if json {
+                serde_json::to_string_pretty(&s).map(|t| t + "\n").map_err(|e| e.to_string())
+            } else {
+                Ok(s.render())
+            }
+        }),
     };
     match result {
         Ok(summary) => {

@@ -7,6 +7,7 @@ mod list;
 mod noether;
 mod report;
 mod run;
+mod summation;
 mod terms;
 
 use clap::{Parser, Subcommand};

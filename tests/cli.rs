@@ -335,6 +335,29 @@ fn bench_overhead_reports_a_ratio() {
     assert!(v["final_position_difference"].as_f64().unwrap() < 1e-9, "the engine and the hand loop agree");
 }
 
+/// On the 32,000-atom benchmark the compensated sums are the exact sums of the same terms to
+/// within an ulp, and the plain sums are not: at step 0 plain summation's momentum error
+/// exceeds the momentum's true change over a step (round-off that would look like drift).
+#[test]
+fn bench_summation_shows_what_compensation_buys() {
+    let o = lagra(&["bench", "summation", "--steps", "1", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let get = |at: &str, w: &str, how: &str| v[at][w][how].as_f64().unwrap();
+    assert!(v["start"]["terms"].as_u64().unwrap() > 800_000);
+    for at in ["start", "end"] {
+        for w in ["energy", "momentum_x"] {
+            let exact = get(at, w, "exact");
+            let ulp = f64::EPSILON * exact.abs();
+            assert!((get(at, w, "compensated") - exact).abs() <= ulp, "{at} {w}");
+        }
+    }
+    let plain_error = (get("start", "energy", "plain") - get("start", "energy", "exact")).abs();
+    assert!(plain_error > 1e-12 * get("start", "energy", "exact").abs(), "plain summation loses bits here");
+    let true_change = (get("end", "momentum_x", "exact") - get("start", "momentum_x", "exact")).abs();
+    assert!((get("start", "momentum_x", "plain") - get("start", "momentum_x", "exact")).abs() > true_change);
+}
+
 /// The Lean definitions and invariance theorems in lean/Lagra are what the checker's term
 /// definitions print today (lean/check.sh then has Lean check them).
 #[test]

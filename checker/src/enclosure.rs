@@ -6,7 +6,7 @@ use crate::mpfi::Mpfi;
 use crate::real::Real;
 use inari::Interval;
 
-pub trait Enclosure: Real {
+pub trait Enclosure: Real + Send + Sync {
     fn abs(self) -> Self;
     fn max(self, o: Self) -> Self;
     /// `(lo, hi)` with lo ≤ every enclosed value ≤ hi; `(NaN, NaN)` when nothing is enclosed.

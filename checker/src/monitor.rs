@@ -140,6 +140,8 @@ pub struct Monitor {
     /// Whether energy is claimed on a model with dissipative terms (then it is a balance).
     balance: bool,
     ledger: Option<Ledger>,
+    /// Threads a checkpoint's pair sums run on (the verdicts are the same bits for any count).
+    threads: usize,
 }
 
 /// What the checker concluded about a run.
@@ -193,7 +195,14 @@ impl Monitor {
             .into_iter()
             .map(|claim| Track { judge: Judge::new(claim.kind), claim, marks: vec![], scale: 0.0, stopped: None })
             .collect();
-        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None })
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads })
+    }
+
+    /// Sums each checkpoint's pair terms on `n` threads (all the CPUs by default): one when
+    /// the checker shares the machine with a kernel that is still stepping.
+    pub fn set_threads(&mut self, n: usize) {
+        self.threads = n.max(1);
     }
 
     /// Checks the claims due at this state. The first state handed in is the reference. For an
@@ -213,7 +222,7 @@ impl Monitor {
             }
             return Err(Halt::InvalidState(e));
         }
-        let q = Lifted::new(&self.model, s, &Interval::EMPTY);
+        let q = Lifted::new(&self.model, s, &Interval::EMPTY).on_threads(self.threads);
         let model = &self.model;
         let first_state = self.reference.is_none();
         if first_state {
@@ -251,7 +260,7 @@ impl Monitor {
             (mark.lo, mark.hi) =
                 deviation(&t.claim, measure(&t.claim, &q, model), r.measures[n].clone(), dissipated).bounds();
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
-                mark = escalate(model, r, s, &t.claim, dissipated, tol);
+                mark = escalate(model, r, s, &t.claim, self.threads, dissipated, tol);
             }
             t.marks.push(mark);
             if let Err(b) = t.judge.admit(s.step, (mark.lo, mark.hi), tol, mark.precision) {
@@ -284,12 +293,12 @@ impl Monitor {
 /// Re-evaluates one checkpoint with MPFR intervals at rising precision: the first enclosure
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
-fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, q: Interval, tol: f64) -> Mark {
+fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Interval, tol: f64) -> Mark {
     let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
-        let now = measure(claim, &Lifted::new(model, s, &proto), model);
-        let then = measure(claim, &Lifted::new(model, &r0, &proto), model);
+        let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model);
+        let then = measure(claim, &Lifted::new(model, &r0, &proto).on_threads(threads), model);
         let (lo, hi) = deviation(claim, now, then, Mpfi::from_interval(precision, q)).bounds();
         Mark { step: s.step, lo, hi, tol, precision }
     };

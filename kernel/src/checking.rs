@@ -46,8 +46,12 @@ impl<'s> Checking<'s> {
         let due = Box::new(move |step: u64| step == 0 || step == last || every.iter().any(|&e| step.is_multiple_of(e)));
         let (states, inbox) = sync_channel::<State>(1);
         let (outbox, verdicts) = sync_channel(1);
+        let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
         let thread = scope.spawn(move || {
             for s in inbox {
+                // one thread while the kernel steps on; every CPU for the last checkpoint, which
+                // nothing else overlaps
+                monitor.set_threads(if s.step == last { cpus } else { 1 });
                 let verdict = monitor.observe(&s.snapshot()).map_err(|h| (h, s));
                 if outbox.send(verdict).is_err() {
                     break;

@@ -84,7 +84,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let mut state = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
     let mut meters: Vec<(Meter, &Prediction)> =
         scene.predictions.iter().map(|p| (Meter::new(p, &scene.model), p)).collect();
-    let watched = opts.trace.is_some() || opts.record.is_some() || !meters.is_empty();
+    let tracing = opts.trace.is_some();
+    let watched = tracing || opts.record.is_some() || !meters.is_empty();
     let overlap = can_overlap(&scene.model, &scene.claims, watched);
 
     let start = Instant::now();
@@ -135,7 +136,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         stop = non_finite(&state);
                     }
                     meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-                    if state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps {
+                    if tracing && (state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps) {
                         trace(&state, solver.potential())?;
                     }
                 }

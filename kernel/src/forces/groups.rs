@@ -91,7 +91,8 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
                     })
                 }
             };
-            let v: [[f64; 3]; N] = std::array::from_fn(|i| s.v[b[i]]);
+            // velocities only for a group that reads them (`Bonded::velocity_dependent`)
+            let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
             let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(Finite::finite).map_err(|what| Singularity {
                 term: self.name,
                 bodies: b.to_vec(),
