@@ -72,11 +72,11 @@ fn witnesses(model: &Model, s: &State) -> Witnesses {
             Shape::Pairwise => {
                 // the pairs within reach (the others add exact zeros)
                 let reach = t.kind.reach(&t.params);
-                let within = |&(i, j): &(usize, usize)| {
+                let within = |i: usize, j: usize| {
                     let d = seen(i, j).x.iter().zip(&s.x[i]).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
                     reach.is_none_or(|r| d < r * r)
                 };
-                let pairs = broad_phase::candidates(&s.x, &model.cell, reach).into_iter().filter(within);
+                let pairs = broad_phase::candidates(&s.x, &model.cell, reach, within).into_iter();
                 energy.extend(pairs.map(|(i, j)| v(&[site(i), seen(i, j)])));
             }
             Shape::Bond(_) => energy.push(v(&t.sites.iter().map(|&j| seen(t.sites[0], j)).collect::<Vec<_>>())),

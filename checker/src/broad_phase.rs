@@ -13,10 +13,16 @@ use crate::model::Cell;
 /// Below this many bodies the double loop is as cheap as the grid.
 const GRID_FROM: usize = 64;
 
-/// The pairs (i < j), sorted, that can be within `reach` of each other (`None`: unbounded).
-pub fn candidates(x: &[[f64; 3]], cell: &Option<Cell>, reach: Option<f64>) -> Vec<(usize, usize)> {
+/// The pairs (i < j), sorted, that can be within `reach` of each other (`None`: unbounded) and
+/// that `keep` keeps (filtered before they are sorted, which is most of the cost).
+pub fn candidates(
+    x: &[[f64; 3]],
+    cell: &Option<Cell>,
+    reach: Option<f64>,
+    keep: impl Fn(usize, usize) -> bool,
+) -> Vec<(usize, usize)> {
     let n = x.len();
-    let every = || (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
+    let every = || (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).filter(|&(i, j)| keep(i, j)).collect();
     let Some(reach) = reach.filter(|r| *r > 0.0 && r.is_finite() && n >= GRID_FROM) else { return every() };
     let Some(grid) = Grid::new(x, cell, reach * 1.01) else { return every() };
     let cells: Vec<[usize; 3]> = x.iter().map(|p| grid.cell_of(p)).collect();
@@ -28,7 +34,7 @@ pub fn candidates(x: &[[f64; 3]], cell: &Option<Cell>, reach: Option<f64>) -> Ve
     for (i, c) in cells.iter().enumerate() {
         let from = pairs.len();
         for m in grid.around(*c) {
-            pairs.extend(members[m].iter().filter(|&&j| j > i).map(|&j| (i, j)));
+            pairs.extend(members[m].iter().filter(|&&j| j > i && keep(i, j)).map(|&j| (i, j)));
         }
         pairs[from..].sort_unstable();
     }
@@ -138,7 +144,7 @@ mod tests {
             let cell = boxed.then_some(Cell { size: [side; 3], periodic });
             let n = x.len();
             let all: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
-            let got = candidates(&x, &cell, Some(reach));
+            let got = candidates(&x, &cell, Some(reach), |_, _| true);
             prop_assert!(got.windows(2).all(|w| w[0] < w[1]), "sorted, no repeats");
             prop_assert_eq!(within(&x, &cell, reach, &got), within(&x, &cell, reach, &all));
         }
@@ -149,8 +155,9 @@ mod tests {
         let x: Vec<[f64; 3]> = (0..1000).map(|i| [(i % 10) as f64, ((i / 10) % 10) as f64, (i / 100) as f64]).collect();
         let cell = Some(Cell { size: [10.0; 3], periodic: [true; 3] });
         // 6 cells of 1.67 per axis, 4.6 bodies a cell: 1000 · 27 · 4.6 / 2 ≈ 62,500 candidates
-        let got = candidates(&x, &cell, Some(1.5));
+        let got = candidates(&x, &cell, Some(1.5), |_, _| true);
         assert!(got.len() <= 62_500, "{} of 499,500", got.len());
-        assert_eq!(candidates(&x, &cell, None).len(), 499_500);
+        assert_eq!(candidates(&x, &cell, None, |_, _| true).len(), 499_500);
+        assert_eq!(candidates(&x, &cell, None, |i, j| i + 1 == j).len(), 999, "kept before sorting");
     }
 }

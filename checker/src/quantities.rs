@@ -88,15 +88,11 @@ impl<R: Real + Send + Sync> Lifted<R> {
                     // The candidates come from a grid (`broad_phase`), in the double loop's order.
                     let reach = t.kind.reach(&t.params);
                     let beyond = reach.map_or(f64::INFINITY, |r| r * r * (1.0 + 1e-6));
-                    let within = |&(i, j): &(usize, usize)| {
+                    let within = |i: usize, j: usize| {
                         let d = Cell::image(&self.cell, std::array::from_fn(|a| self.x[j][a] - self.x[i][a]));
                         d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= beyond
                     };
-                    let pairs: Vec<(usize, usize)> =
-                        broad_phase::candidates(&self.x, &self.cell, reach.map(|r| r * (1.0 + 1e-6)))
-                            .into_iter()
-                            .filter(within)
-                            .collect();
+                    let pairs = broad_phase::candidates(&self.x, &self.cell, reach.map(|r| r * (1.0 + 1e-6)), within);
                     let chunks: Vec<&[(usize, usize)]> = pairs.chunks(CHUNK).collect();
                     let sums = in_order(chunks.len(), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
