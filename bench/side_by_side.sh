@@ -79,6 +79,9 @@ def lammps(log):
     return float(m[1]), int(m[3]), int(m[4])
 def ns(log):
     t, s, a = lammps(log); return t / s / a * 1e9
+import datetime, os
+cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "unknown CPU")
+print(f"Measured {datetime.date.today()} on {os.cpu_count()} CPUs ({cpu}), one run each.\n")
 l1, l2 = j("lj32k_1.json"), j("lj32k_2.json")
 opt1 = ns("w1opt.log")
 print("### LJ benchmark (bench/in.lj: 32,000 atoms, 100 NVE steps), ns per atom-step, lower is better\n")

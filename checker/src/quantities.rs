@@ -238,6 +238,14 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// `in_order` gives f(0), …, f(n − 1) in order, whatever the thread count.
+        #[test]
+        fn in_order_is_the_sequential_map(n in 0usize..40, threads in 0usize..6) {
+            prop_assert_eq!(in_order(n, threads, |k| k * k + 1), (0..n).map(|k| k * k + 1).collect::<Vec<_>>());
+        }
+    }
+
     /// 2,197 LJ atoms in a periodic box: ~50,000 pairs, a dozen chunks.
     fn liquid() -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] };

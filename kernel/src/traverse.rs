@@ -57,7 +57,11 @@ impl Binned {
     /// `None` if no grid fits (too few bodies, too few cells along a periodic axis, bodies
     /// scattered far apart): then every pair is the way.
     pub fn new(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64) -> Option<Binned> {
-        let grid = Grid::fine(x, cell, reach).filter(|_| x.len() >= CELL_LIST_FROM)?;
+        // the count first: for a few bodies the grid (its stencil) would cost more than the pairs
+        if x.len() < CELL_LIST_FROM {
+            return None;
+        }
+        let grid = Grid::fine(x, cell, reach)?;
         let (order, start) = grid.bin(x);
         Some(Binned { order, start, grid })
     }
