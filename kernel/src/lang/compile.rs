@@ -3,7 +3,7 @@
 
 use super::block::{flags, typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
-use super::lattice::{self, Packing};
+use super::lattice::{self, Draw, Packing};
 use super::{Pair, Rule};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Scene, Solver};
@@ -16,7 +16,7 @@ use std::collections::HashMap;
 
 /// Types every scene knows without declaring them: display sizes only.
 const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
-const LATTICE_FIELDS: &[&str] = &["type", "kind", "density", "cells", "temperature", "seed"];
+const LATTICE_FIELDS: &[&str] = &["type", "kind", "density", "cells", "temperature", "seed", "velocities"];
 const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "colour", "size"];
 
 /// The colour charges, weights of SU(3)'s fundamental representation (|c|² = 1/3), and the
@@ -317,8 +317,9 @@ impl<'a> Compiler<'a> {
         Ok((Body { mass, charge, colour }, size))
     }
 
-    /// `lattice { type, kind: fcc, density, cells: [nx, ny, nz], temperature, seed }`: bodies on
-    /// a lattice filling a periodic box of its own, with Maxwell–Boltzmann velocities.
+    /// `lattice { type, kind: fcc, density, cells: [nx, ny, nz], temperature, seed, velocities }`:
+    /// bodies on a lattice filling a periodic box of its own, with thermal velocities
+    /// (Maxwell–Boltzmann, or `velocities: uniform` like LAMMPS's `velocity create`).
     fn lattice(&mut self, mut b: Block<'a>, at: Span) -> Result<(), Diagnostic> {
         if self.cell.is_some() {
             let what = if self.lattice {
@@ -361,11 +362,20 @@ impl<'a> Compiler<'a> {
             return err(at, format!("lattice.temperature must be zero or positive, got {temperature}"));
         }
         let seed = b.take("seed").map(|f| self.rd.count(&f, "lattice")).transpose()?.unwrap_or(1);
+        let draw = match b.take("velocities") {
+            None => Draw::Gaussian,
+            Some(f) => {
+                let (name, at) = word(&f, "lattice")?;
+                Draw::from_name(name).ok_or_else(|| {
+                    Diagnostic::new(at, format!("unknown velocity draw `{name}`; known: gaussian, uniform"))
+                })?
+            }
+        };
         let mut field = |name: &str| template.get(name).cloned();
         let (body, size) = self.body(&mut field, at, size)?;
         let cells = [cells[0] as usize, cells[1] as usize, cells[2] as usize];
         let (x, side) = kind.sites(density, cells);
-        let v = lattice::velocities(x.len(), temperature / body.mass, seed);
+        let v = lattice::velocities(x.len(), temperature / body.mass, seed, draw);
         self.cell = Some((Cell { size: side, periodic: [true; 3] }, at));
         self.lattice = true;
         for (x, v) in x.into_iter().zip(v) {

@@ -44,14 +44,38 @@ impl Packing {
     }
 }
 
-/// `n` velocities with each component normal of variance `t_over_m` (k_B·T/m), the centre of
-/// mass at rest, rescaled so the kinetic temperature over 3n − 3 degrees of freedom is exact.
-pub fn velocities(n: usize, t_over_m: f64, seed: u64) -> Vec<[f64; 3]> {
+/// How the velocity components are drawn before they are rescaled to the temperature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Draw {
+    /// Normal: Maxwell–Boltzmann, the equilibrium distribution (the default).
+    Gaussian,
+    /// Uniform on a symmetric interval: LAMMPS's `velocity create` default, so a scene can start
+    /// like LAMMPS's `bench/in.lj` (its fastest bodies are slower than Maxwell–Boltzmann's tail).
+    Uniform,
+}
+
+impl Draw {
+    pub fn from_name(s: &str) -> Option<Draw> {
+        match s {
+            "gaussian" => Some(Draw::Gaussian),
+            "uniform" => Some(Draw::Uniform),
+            _ => None,
+        }
+    }
+}
+
+/// `n` velocities with components drawn by `draw`, the centre of mass at rest, rescaled so the
+/// kinetic temperature (k_B·T/m = `t_over_m`) over 3n − 3 degrees of freedom is exact.
+pub fn velocities(n: usize, t_over_m: f64, seed: u64, draw: Draw) -> Vec<[f64; 3]> {
     if t_over_m == 0.0 || n < 2 {
         return vec![[0.0; 3]; n];
     }
     let mut rng = SplitMix(seed);
-    let mut v: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| rng.normal())).collect();
+    let mut component = || match draw {
+        Draw::Gaussian => rng.normal(),
+        Draw::Uniform => 2.0 * rng.uniform() - 1.0,
+    };
+    let mut v: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| component())).collect();
     let mean: [f64; 3] = std::array::from_fn(|c| v.iter().map(|v| v[c]).sum::<f64>() / n as f64);
     v.iter_mut().for_each(|v| (0..3).for_each(|c| v[c] -= mean[c]));
     let sq: f64 = v.iter().flatten().map(|c| c * c).sum();
@@ -102,22 +126,29 @@ mod tests {
 
     #[test]
     fn velocities_have_the_exact_temperature_and_no_drift() {
-        let v = velocities(500, 1.44, 87287);
-        let p: [f64; 3] = std::array::from_fn(|c| v.iter().map(|v| v[c]).sum::<f64>());
-        assert!(p.iter().all(|p| p.abs() < 1e-12), "{p:?}");
-        let t = v.iter().flatten().map(|c| c * c).sum::<f64>() / (3.0 * 500.0 - 3.0);
-        assert!((t - 1.44).abs() < 1e-12, "{t}");
-        assert_eq!(v, velocities(500, 1.44, 87287), "a seed gives one draw");
-        assert_ne!(v, velocities(500, 1.44, 87288));
+        for draw in [Draw::Gaussian, Draw::Uniform] {
+            let v = velocities(500, 1.44, 87287, draw);
+            let p: [f64; 3] = std::array::from_fn(|c| v.iter().map(|v| v[c]).sum::<f64>());
+            assert!(p.iter().all(|p| p.abs() < 1e-12), "{p:?}");
+            let t = v.iter().flatten().map(|c| c * c).sum::<f64>() / (3.0 * 500.0 - 3.0);
+            assert!((t - 1.44).abs() < 1e-12, "{t}");
+            assert_eq!(v, velocities(500, 1.44, 87287, draw), "a seed gives one draw");
+            assert_ne!(v, velocities(500, 1.44, 87288, draw));
+        }
     }
 
-    #[test]
-    fn the_draw_is_normal() {
-        // fourth moment over variance squared: 3 for a normal distribution
-        let v = velocities(20_000, 1.0, 7);
+    /// Fourth moment over variance squared: 3 for a normal distribution, 9/5 for a uniform one.
+    fn kurtosis(draw: Draw) -> f64 {
+        let v = velocities(20_000, 1.0, 7, draw);
         let c: Vec<f64> = v.iter().flatten().copied().collect();
         let m2 = c.iter().map(|c| c * c).sum::<f64>() / c.len() as f64;
         let m4 = c.iter().map(|c| c.powi(4)).sum::<f64>() / c.len() as f64;
-        assert!((m4 / (m2 * m2) - 3.0).abs() < 0.1, "kurtosis {}", m4 / (m2 * m2));
+        m4 / (m2 * m2)
+    }
+
+    #[test]
+    fn the_draw_is_normal_or_uniform() {
+        assert!((kurtosis(Draw::Gaussian) - 3.0).abs() < 0.1, "{}", kurtosis(Draw::Gaussian));
+        assert!((kurtosis(Draw::Uniform) - 1.8).abs() < 0.05, "{}", kurtosis(Draw::Uniform));
     }
 }

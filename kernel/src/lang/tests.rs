@@ -334,6 +334,10 @@ fn lattice_errors() {
     );
     assert_eq!(lattice_error("kind: fcc", "kind: hcp"), at(3, 31, "unknown lattice kind `hcp`; known: fcc, sc"));
     assert_eq!(
+        lattice_error("seed: 5", "seed: 5, velocities: maxwell"),
+        at(3, 111, "unknown velocity draw `maxwell`; known: gaussian, uniform")
+    );
+    assert_eq!(
         lattice_error("cells: [3, 4, 5]", "cells: [3, 4.5, 5]"),
         at(3, 60, "lattice.cells expects whole numbers from 1 to 1000, got 4.5")
     );
@@ -344,6 +348,6 @@ fn lattice_errors() {
     );
     assert_eq!(
         lattice_error("seed: 5", "seed: 5, colour: red"),
-        at(3, 99, "unknown field `colour` for lattice; expected type, kind, density, cells, temperature, seed")
+        at(3, 99, "unknown field `colour` for lattice; expected type, kind, density, cells, temperature, seed, velocities")
     );
 }
