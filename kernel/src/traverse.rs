@@ -191,15 +191,20 @@ impl Grid {
             for a in (0..3).rev() {
                 let v = at[a] as i64 + d[a];
                 let n = self.n[a] as i64;
-                // past the last cell the neighbour is the first one, one box length on
-                image = 3 * image + (1 + v.div_euclid(n)) as u8;
-                if self.periodic[a] {
-                    m[a] = v.rem_euclid(n) as usize;
-                } else if (0..n).contains(&v) {
-                    m[a] = v as usize;
+                // past the last cell the neighbour is the first one, one box length on (|d| ≤ per
+                // and n ≥ 2·per + 1 on a periodic axis: one wrap at most, no division needed)
+                let (wrapped, digit) = if v < 0 {
+                    (v + n, 0)
+                } else if v >= n {
+                    (v - n, 2)
                 } else {
+                    (v, 1)
+                };
+                if digit != 1 && !self.periodic[a] {
                     continue 'offsets;
                 }
+                image = 3 * image + digit;
+                m[a] = wrapped as usize;
             }
             out.push((self.index(m), image));
         }
