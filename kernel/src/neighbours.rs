@@ -13,6 +13,9 @@
 
 use crate::traverse::Binned;
 use lagra_checker::model::Cell;
+use rayon::prelude::*;
+use rayon::ThreadPool;
+use std::ops::Range;
 
 /// The skin as a fraction of the reach (LAMMPS's 0.3 for a 2.5 cutoff).
 const SKIN: f64 = 0.12;
@@ -20,7 +23,7 @@ const SKIN: f64 = 0.12;
 /// A listed neighbour: its position in the list's order in the low 27 bits, the index of the
 /// image shift to add to xⱼ − xᵢ (`Neighbours::shifts`) in the high 5. One word per pair: the
 /// pair loop reads one stream.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pair(u32);
 
 impl Pair {
@@ -93,7 +96,7 @@ impl Neighbours {
 
     /// Rebuilds the list if two bodies together moved more than the skin since the last build,
     /// and gathers the wrapped positions in the list's order.
-    pub fn update(&mut self, x: &[[f64; 3]], cell: &Option<Cell>) {
+    pub fn update(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
         // A pair the list left out was at least reach + skin apart at the build; it can have
         // come within reach only if its two bodies together moved more than the skin, so the
         // two largest displacements decide (less often than "one body moved half the skin",
@@ -106,7 +109,7 @@ impl Neighbours {
             }
         }
         if self.at.len() != x.len() || !(first.sqrt() + second.sqrt() < self.skin * (1.0 - 1e-9)) {
-            self.build(x, cell);
+            self.build(x, cell, pool);
         }
         self.wrapped.clear();
         self.wrapped.extend(self.bodies.iter().zip(&self.offset).map(|(&i, o)| {
@@ -115,7 +118,7 @@ impl Neighbours {
         }));
     }
 
-    fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>) {
+    fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
         let r = self.reach + self.skin;
         self.at.clear();
         self.at.extend_from_slice(x);
@@ -142,28 +145,23 @@ impl Neighbours {
         self.wrapped.extend(self.bodies.iter().map(|&i| wrapped[i as usize]));
         let Neighbours { start, pairs, shifts, wrapped: w, .. } = self;
         start.clear();
-        let r2 = r * r;
-        // Every candidate is written, and kept by advancing the end only if it is within reach:
-        // no branch to mispredict on the ~1 in 4 candidates that are.
-        let mut end = 0;
         match &binned {
-            Some(b) => b.each(|i, runs| {
-                start.push(end);
-                let xi = w[i];
-                for (run, k) in runs {
-                    if pairs.len() < end + run.len() {
-                        pairs.resize((2 * pairs.len()).max(end + run.len() + 1024), Pair(0));
-                    }
-                    let s = &shifts[*k as usize];
-                    let (o0, o1, o2) = (s[0] - xi[0], s[1] - xi[1], s[2] - xi[2]);
-                    for j in run.clone() {
-                        let p = &w[j];
-                        let (d0, d1, d2) = (p[0] + o0, p[1] + o1, p[2] + o2);
-                        pairs[end] = Pair::new(j, *k);
-                        end += usize::from(d0 * d0 + d1 * d1 + d2 * d2 < r2);
-                    }
+            // in cell order, in as many parts as there are threads, each listed on its own and
+            // joined in order: the same list as one pass makes, for any thread count
+            Some(b) => {
+                let threads = pool.map_or(1, |p| p.current_num_threads());
+                let list = |cells: Range<usize>| listed_in(b, cells, w, shifts, r);
+                let parts: Vec<(Vec<usize>, Vec<Pair>)> = match pool {
+                    Some(p) if threads > 1 => p.install(|| b.split(threads).into_par_iter().map(list).collect()),
+                    _ => vec![list(0..usize::MAX)],
+                };
+                pairs.clear();
+                for (s, p) in parts {
+                    let base = pairs.len();
+                    start.extend(s.into_iter().map(|k| k + base));
+                    pairs.extend_from_slice(&p);
                 }
-            }),
+            }
             // every pair, in body order
             None => {
                 pairs.clear();
@@ -171,22 +169,47 @@ impl Neighbours {
                     start.push(pairs.len());
                     for j in i + 1..w.len() {
                         let d = Cell::image(cell, std::array::from_fn(|a| w[j][a] - w[i][a]));
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r2 {
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r * r {
                             pairs.push(Pair::new(j, image_of(shifts, &w[i], &w[j], d)));
                         }
                     }
                 }
-                end = pairs.len();
             }
         }
-        pairs.truncate(end);
-        start.push(end);
+        start.push(pairs.len());
         self.builds += 1;
     }
 
     pub fn count(&self) -> usize {
         self.pairs.len()
     }
+}
+
+/// The pairs within `r` of the positions in `cells` (clamped to the grid), each position's
+/// starting at the offset it is given. Every candidate is written, and kept by advancing the end
+/// only if it is within reach: no branch to mispredict on the ~1 in 4 candidates that are.
+fn listed_in(b: &Binned, cells: Range<usize>, w: &[[f64; 3]], shifts: &[[f64; 3]; 32], r: f64) -> (Vec<usize>, Vec<Pair>) {
+    let (mut start, mut pairs, mut end) = (vec![], vec![], 0);
+    let r2 = r * r;
+    b.each_in(cells.start..cells.end.min(b.cells()), |i, runs| {
+        start.push(end);
+        let xi = w[i];
+        for (run, k) in runs {
+            if pairs.len() < end + run.len() {
+                pairs.resize((2 * pairs.len()).max(end + run.len() + 1024), Pair(0));
+            }
+            let s = &shifts[*k as usize];
+            let (o0, o1, o2) = (s[0] - xi[0], s[1] - xi[1], s[2] - xi[2]);
+            for j in run.clone() {
+                let p = &w[j];
+                let (d0, d1, d2) = (p[0] + o0, p[1] + o1, p[2] + o2);
+                pairs[end] = Pair::new(j, *k);
+                end += usize::from(d0 * d0 + d1 * d1 + d2 * d2 < r2);
+            }
+        }
+    });
+    pairs.truncate(end);
+    (start, pairs)
 }
 
 /// The index of the shift d − (xⱼ − xᵢ) between wrapped positions: −1, 0 or 1 box length per
@@ -220,13 +243,13 @@ mod tests {
             // bodies that have drifted out of the box, as unwrapped positions do in a long run
             let mut x: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-3.0 * side, 4.0 * side))).collect();
             let mut list = Neighbours::new(&cell, reach).unwrap();
-            list.update(&x, &cell);
+            list.update(&x, &cell, None);
             let far = rng.uniform(0.0, n as f64) as usize;
             for (i, p) in x.iter_mut().enumerate() {
                 let most = if i == far { 0.7 } else { 0.29 } * list.skin / 3f64.sqrt();
                 p.iter_mut().for_each(|c| *c += rng.uniform(-most, most));
             }
-            list.update(&x, &cell);
+            list.update(&x, &cell, None);
             prop_assert_eq!(list.builds, 1);
             let mut listed = vec![];
             prop_assert_eq!(list.bodies.len(), n);
@@ -255,18 +278,35 @@ mod tests {
         }
     }
 
+    /// A list built in parts on 2 or 3 threads is the list one pass builds.
+    #[test]
+    fn the_list_is_the_same_on_any_number_of_threads() {
+        let mut rng = Rng::new(11);
+        let cell = Some(Cell { size: [16.0; 3], periodic: [true; 3] });
+        let x: Vec<[f64; 3]> = (0..3000).map(|_| std::array::from_fn(|_| rng.uniform(-4.0, 20.0))).collect();
+        let built = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut list = Neighbours::new(&cell, 2.5).unwrap();
+            list.update(&x, &cell, (threads > 1).then_some(&pool));
+            (list.bodies, list.start, list.pairs)
+        };
+        let one = built(1);
+        assert!(one.2.len() > 50_000, "{}", one.2.len());
+        assert!(built(2) == one && built(3) == one);
+    }
+
     /// Two bodies that together moved just over the skin (three quarters and a third of it)
     /// bring a rebuild; either alone does not.
     #[test]
     fn two_bodies_moving_the_skin_together_rebuild_the_list() {
         let mut x: Vec<[f64; 3]> = (0..100).map(|i| [(i % 5) as f64 * 3.0, (i / 5 % 5) as f64 * 3.0, (i / 25) as f64 * 3.0]).collect();
         let mut list = Neighbours::new(&None, 2.5).unwrap();
-        list.update(&x, &None);
+        list.update(&x, &None, None);
         x[7][0] += 0.75 * list.skin;
-        list.update(&x, &None);
+        list.update(&x, &None, None);
         assert_eq!(list.builds, 1);
         x[40][1] -= 0.34 * list.skin;
-        list.update(&x, &None);
+        list.update(&x, &None, None);
         assert_eq!(list.builds, 2);
     }
 

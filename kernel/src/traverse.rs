@@ -66,15 +66,31 @@ impl Binned {
         Some(Binned { order, start, grid })
     }
 
+    pub fn cells(&self) -> usize {
+        self.grid.cells()
+    }
+
+    /// The cells cut into `parts` consecutive ranges holding about as many bodies each.
+    pub fn split(&self, parts: usize) -> Vec<Range<usize>> {
+        let (cells, n) = (self.grid.cells(), self.order.len());
+        let bound = |k: usize| if k == parts { cells } else { self.start.partition_point(|&b| b < n * k / parts).min(cells) };
+        (0..parts).map(|k| bound(k)..bound(k + 1)).collect()
+    }
+
     /// Calls `visit(b, runs)` for every position b in cell order, with the runs of positions
     /// whose bodies it pairs with (each pair once over all calls): in its own cell the ones after
     /// it, in the stencil's cells ahead of its cell all of them. Each run carries its `image`
     /// (0..27, axis x least significant, digit 0/1/2 for −L/0/+L): for bodies wrapped into the box,
     /// the box shift to add to xⱼ − xᵢ, so that no division or rounding is needed per pair.
-    pub fn each(&self, mut visit: impl FnMut(usize, &[(Range<usize>, u8)])) {
+    pub fn each(&self, visit: impl FnMut(usize, &[(Range<usize>, u8)])) {
+        self.each_in(0..self.grid.cells(), visit)
+    }
+
+    /// `each`, for the positions in the cells `cells` only.
+    pub fn each_in(&self, cells: Range<usize>, mut visit: impl FnMut(usize, &[(Range<usize>, u8)])) {
         let mut runs: Vec<(Range<usize>, u8)> = Vec::with_capacity(self.grid.stencil.len() + 1);
         let mut shell = Vec::with_capacity(self.grid.stencil.len());
-        for c in 0..self.grid.cells() {
+        for c in cells {
             self.grid.half_shell(c, &mut shell);
             let end = self.start[c + 1];
             for b in self.start[c]..end {

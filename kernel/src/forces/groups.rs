@@ -277,7 +277,7 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let Some(list) = &self.list else { return self.traversed(s, f) };
         let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        l.update(s.x, &self.cell);
+        l.update(s.x, &self.cell, self.pool.as_deref());
         let energy = self.through_list(&l, s, f)?;
         if energy.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
             return Ok(energy);
