@@ -46,8 +46,10 @@ enum Study {
     /// benchmark summed plainly, compensated (Neumaier) and exactly, at the start and after
     /// --steps steps.
     Summation {
+        /// Steps between the first and the last state compared.
         #[arg(long, default_value_t = 100)]
         steps: u64,
+        /// The three sums of each witness at both states, as JSON.
         #[arg(long)]
         json: bool,
     },

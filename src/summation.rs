@@ -17,6 +17,8 @@ use rug::Float;
 use serde::Serialize;
 
 const SCENE: &str = "scenes/bench/lj_32k_shifted.lagra";
+/// The scene itself, built into the binary so the study runs from anywhere.
+const TEXT: &str = include_str!("../scenes/bench/lj_32k_shifted.lagra");
 
 /// Enough bits that adding binary64 numbers (exponents −1074 … 1023) never rounds.
 const EXACT_BITS: u32 = 2200;
@@ -96,9 +98,7 @@ pub struct Study {
 }
 
 pub fn study(steps: u64) -> Result<Study, String> {
-    let text = std::fs::read_to_string(format!("{}/{SCENE}", env!("CARGO_MANIFEST_DIR")))
-        .map_err(|e| format!("{SCENE}: {e}"))?;
-    let scene = compile(&text).map_err(|d| d.render(SCENE, &text).to_string())?;
+    let scene = compile(TEXT).map_err(|d| d.render(SCENE, TEXT).to_string())?;
     let graph = LagrangianGraph::new(&scene.model);
     let mut s = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
     let start = witnesses(&scene.model, &s);
