@@ -34,7 +34,9 @@ impl<R: Real + Send + Sync> Lifted<R> {
                 colour: b.colour.map(|c| proto.lift(c)),
             })
             .collect();
-        let params = model.terms.iter().map(|t| t.params.iter().map(|&c| proto.lift(c)).collect()).collect();
+        // each instance's parameters, then its constants (`Definition::constants`), once
+        let lifted = |t: &TermInstance| -> Vec<R> { t.params.iter().map(|&c| proto.lift(c)).collect() };
+        let params = model.terms.iter().map(|t| [lifted(t), t.kind.constants(&lifted(t))].concat()).collect();
         Lifted { sites, params, zero: proto.lift(0.0), x: s.x.to_vec(), cell: model.cell, threads: 1 }
     }
 

@@ -33,12 +33,16 @@ fn body() -> impl Strategy<Value = Body3> {
     (prop::array::uniform3(-10.0f64..10.0), prop::array::uniform3(-5.0f64..5.0), 0.01f64..100.0, -3.0f64..3.0)
 }
 
-/// The term evaluated on `bodies` (as many as its shape takes) in `proto`'s arithmetic.
-fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R) -> (R, Option<R>) {
+/// The term evaluated on `bodies` (as many as its shape takes) in `proto`'s arithmetic, from
+/// the bare parameters, or with its constants worked out beforehand as `Lifted` does.
+fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R, prepared: bool) -> (R, Option<R>) {
     let n = kind.spec().shape.arity();
     let sites: Vec<Site<R>> = bodies[..n].iter().map(|b| site(proto, b.0, b.1, b.2, b.3)).collect();
     let s: Vec<&Site<R>> = sites.iter().collect();
-    let p: Vec<R> = params.iter().map(|&c| proto.lift(c)).collect();
+    let mut p: Vec<R> = params.iter().map(|&c| proto.lift(c)).collect();
+    if prepared {
+        p.extend(kind.constants(&p));
+    }
     (kind.potential(&p, &s), kind.rayleigh(&p, &s))
 }
 
@@ -58,8 +62,11 @@ proptest! {
             // vector parameters (fields) may point anywhere; scalar ones are magnitudes
             let vector = kind.spec().params.iter().any(|q| q.len == 3);
             let params: Vec<f64> = params[..w].iter().zip(&signs).map(|(&p, &s)| if vector && s { -p } else { p }).collect();
-            let (iv, iv_f) = eval(kind, &params, &bodies, &Interval::EMPTY);
-            let (hp, hp_f) = eval(kind, &params, &bodies, &Float::new(BITS));
+            let (iv, iv_f) = eval(kind, &params, &bodies, &Interval::EMPTY, false);
+            let (hp, hp_f) = eval(kind, &params, &bodies, &Float::new(BITS), false);
+            // constants worked out once give the same bits as worked out in the term
+            let (prepared, _) = eval(kind, &params, &bodies, &Interval::EMPTY, true);
+            prop_assert!(prepared.inf().to_bits() == iv.inf().to_bits() && prepared.sup().to_bits() == iv.sup().to_bits(), "{kind:?}");
             // where the definition is undefined (FENE past R₀) there is nothing to enclose
             prop_assert!(hp.is_nan() || inside(iv, &hp), "{kind:?}: {iv} does not hold {hp}");
             if let (Some(a), Some(b)) = (iv_f, hp_f) {
@@ -195,7 +202,7 @@ proptest! {
             let r = reach * (1.0 + 1e-6) + extra;
             let far = [dir[0] / norm * r, dir[1] / norm * r, dir[2] / norm * r];
             let bodies: Vec<Body3> = vec![([0.0; 3], [0.0; 3], 1.0, 1.0), (far, [0.0; 3], 1.0, -1.0)];
-            let (v, _) = eval(kind, params, &bodies, &Interval::EMPTY);
+            let (v, _) = eval(kind, params, &bodies, &Interval::EMPTY, false);
             prop_assert!(v.inf() == 0.0 && v.sup() == 0.0, "{kind:?} at {r} beyond reach {reach}: {v}");
         }
     }
@@ -224,7 +231,7 @@ fn potential_at(kind: Kind, params: &[f64], x: &[[f64; 3]]) -> f64 {
         .enumerate()
         .map(|(i, x)| (*x, [0.1, -0.2, 0.3], 1.0 + i as f64, if i % 2 == 0 { 1.0 } else { -0.7 }))
         .collect();
-    eval(kind, params, &bodies, &0.0f64).0
+    eval(kind, params, &bodies, &0.0f64, false).0
 }
 
 proptest! {

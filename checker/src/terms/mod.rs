@@ -84,6 +84,12 @@ pub trait Definition {
     /// Potential energy of the sites `s` (in the order the shape gives) with parameters `p`
     /// (flattened in the order of `SPEC.params`).
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R;
+    /// Values of the parameters alone that `potential` reads after them (`p[width..]`, through
+    /// `constant`): worked out once per instance by `Lifted` rather than once per pair, and by
+    /// the definition itself, with the same code, when a caller passes the bare parameters.
+    fn constants<R: Real>(_p: &[R]) -> Vec<R> {
+        vec![]
+    }
     /// Rayleigh dissipation function F: the term's force on a velocity is −∂F/∂v.
     /// `None` for a conservative term.
     fn rayleigh<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<R> {
@@ -118,6 +124,12 @@ pub trait Definition {
     }
 }
 
+/// Constant `k` of `D::constants`: as given after the parameters in `p`, or worked out now.
+fn constant<D: Definition, R: Real>(p: &[R], k: usize) -> R {
+    let width = D::SPEC.width();
+    p.get(width + k).cloned().unwrap_or_else(|| D::constants(&p[..width]).swap_remove(k))
+}
+
 macro_rules! vocabulary {
     ($($kind:ident => $module:ident),* $(,)?) => {
         $(pub mod $module; pub use $module::$kind;)*
@@ -133,6 +145,9 @@ macro_rules! vocabulary {
             }
             pub fn potential<R: Real>(self, p: &[R], s: &[&Site<R>]) -> R {
                 match self { $(Kind::$kind => $kind::potential(p, s)),* }
+            }
+            pub fn constants<R: Real>(self, p: &[R]) -> Vec<R> {
+                match self { $(Kind::$kind => $kind::constants(p)),* }
             }
             pub fn rayleigh<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<R> {
                 match self { $(Kind::$kind => $kind::rayleigh(p, s)),* }
