@@ -20,7 +20,11 @@ use std::hint::black_box;
 fn lattice(k: usize) -> (Vec<Body>, Vec<[f64; 3]>) {
     let n = k * k * k;
     let bodies = (0..n)
-        .map(|i| Body { mass: 1.0, charge: if i % 2 == 0 { 1.0 } else { -1.0 }, colour: [0.5, 0.3 - 0.1 * (i % 3) as f64] })
+        .map(|i| Body {
+            mass: 1.0,
+            charge: if i % 2 == 0 { 1.0 } else { -1.0 },
+            colour: [0.5, 0.3 - 0.1 * (i % 3) as f64],
+        })
         .collect();
     let x = (0..n)
         .map(|i| {
@@ -55,7 +59,11 @@ fn instance(kind: Kind, n: usize) -> Vec<TermInstance> {
             let steps = [0, 1, k + 1, k + 2];
             (0..n)
                 .filter(|i| i % k + 3 <= k && (i / k) % k + 1 < k)
-                .map(|i| TermInstance { kind, sites: steps[..arity].iter().map(|s| i + s).collect(), params: params.clone() })
+                .map(|i| TermInstance {
+                    kind,
+                    sites: steps[..arity].iter().map(|s| i + s).collect(),
+                    params: params.clone(),
+                })
                 .collect()
         }
         _ => vec![TermInstance { kind, sites: vec![], params }],

@@ -178,20 +178,33 @@ impl Real for Lean {
     }
 }
 
-const OPAQUE: &[&str] = &["Lagra.sqrt", "Lagra.exp", "Lagra.log", "Lagra.acos", "Lagra.cos", "Lagra.sin", "Lagra.atan2"];
+const OPAQUE: &[&str] =
+    &["Lagra.sqrt", "Lagra.exp", "Lagra.log", "Lagra.acos", "Lagra.cos", "Lagra.sin", "Lagra.atan2"];
 
 /// The parameter names of a kind, vector parameters by component (`g_0 g_1 g_2`).
 fn parameters(kind: Kind) -> Vec<String> {
     kind.spec()
         .params
         .iter()
-        .flat_map(|p| if p.len == 1 { vec![p.name.to_string()] } else { (0..p.len).map(|i| format!("{}_{i}", p.name)).collect() })
+        .flat_map(|p| {
+            if p.len == 1 {
+                vec![p.name.to_string()]
+            } else {
+                (0..p.len).map(|i| format!("{}_{i}", p.name)).collect()
+            }
+        })
         .collect()
 }
 
 fn site(i: usize) -> Site<Lean> {
     let f = |name: &str| Lean(format!("s{i}.{name}"));
-    Site { x: [f("x"), f("y"), f("z")], v: [f("vx"), f("vy"), f("vz")], m: f("m"), q: f("q"), colour: [f("c1"), f("c2")] }
+    Site {
+        x: [f("x"), f("y"), f("z")],
+        v: [f("vx"), f("vy"), f("vz")],
+        m: f("m"),
+        q: f("q"),
+        colour: [f("c1"), f("c2")],
+    }
 }
 
 /// The potential of a kind as a Lean expression, and whether it stays within ℚ.
@@ -230,10 +243,8 @@ pub fn terms() -> String {
 
 /// The symmetries stated of every pair and bond term: a common translation, and a quarter turn
 /// about z (a rotation with rational entries, so it stays within ℚ).
-const SYMMETRIES: &[(&str, &str, &str)] = &[
-    ("translation", "(dx dy dz : Rat)", ".shift dx dy dz"),
-    ("quarter_turn_z", "", ".quarterTurnZ"),
-];
+const SYMMETRIES: &[(&str, &str, &str)] =
+    &[("translation", "(dx dy dz : Rat)", ".shift dx dy dz"), ("quarter_turn_z", "", ".quarterTurnZ")];
 
 /// Stated but not (yet) proved within Lean core: (kind, symmetry). Each is a `sorry` that
 /// `lean/check.sh` counts, and `docs/lean.md` lists.

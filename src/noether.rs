@@ -35,7 +35,9 @@ pub fn apply(scene: &mut Scene, path: &str, source: &str) -> (Analysis, Vec<Stri
         .zip(&scene.claim_spans)
         .filter_map(|(c, at)| {
             analysis.contradiction(c).map(|why| {
-                Diagnostic::new(*at, format!("warning: {} is not implied by the scene's symmetries: {why}", c.label())).render(path, source).to_string()
+                Diagnostic::new(*at, format!("warning: {} is not implied by the scene's symmetries: {why}", c.label()))
+                    .render(path, source)
+                    .to_string()
             })
         })
         .collect();

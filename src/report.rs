@@ -138,7 +138,11 @@ impl Summary {
             let _ = writeln!(s, "plan        checker: {}", self.checker);
         }
         if self.generated > 0 {
-            let _ = writeln!(s, "noether     {} claim(s) from the scene's symmetries (`lagra noether FILE` says which)", self.generated);
+            let _ = writeln!(
+                s,
+                "noether     {} claim(s) from the scene's symmetries (`lagra noether FILE` says which)",
+                self.generated
+            );
         }
         for c in &self.claims {
             let _ = writeln!(s, "{}", c.line);

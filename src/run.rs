@@ -1,9 +1,9 @@
 //! `lagra run FILE`.
 
 use crate::{noether, report};
-use lagra_checker::decision::Verdict;
 use lagra_checker::certificate::{self, Certificate};
 use lagra_checker::checksum::label;
+use lagra_checker::decision::Verdict;
 use lagra_checker::model::Snapshot;
 use lagra_checker::states::StateWriter;
 use lagra_kernel::lang::compile;

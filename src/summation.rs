@@ -36,7 +36,11 @@ impl Sums {
     fn of(terms: &[f64]) -> Sums {
         let mut exact = Float::with_val(EXACT_BITS, 0);
         terms.iter().for_each(|&t| exact += t);
-        Sums { plain: terms.iter().sum(), compensated: terms.iter().copied().collect::<Sum>().value(), exact: exact.to_f64() }
+        Sums {
+            plain: terms.iter().sum(),
+            compensated: terms.iter().copied().collect::<Sum>().value(),
+            exact: exact.to_f64(),
+        }
     }
     fn plain_error(&self) -> f64 {
         (self.plain - self.exact).abs()

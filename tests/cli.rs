@@ -367,7 +367,8 @@ fn lean_definitions_are_current() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     for f in ["Terms.lean", "Invariance.lean"] {
         let fresh = std::fs::read_to_string(dir.path().join(f)).unwrap();
-        let shipped = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("lean/Lagra").join(f)).unwrap();
+        let shipped =
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("lean/Lagra").join(f)).unwrap();
         assert!(fresh == shipped, "lean/Lagra/{f} is stale: run `lagra lean --definitions lean/Lagra`");
     }
 }
@@ -385,7 +386,12 @@ fn lean_obligations_are_exact_and_deterministic() {
     assert_eq!(a.status.code(), Some(0), "{}", stderr(&a));
     assert!(a.stdout == b.stdout);
     let lean = stdout(&a);
-    for t in ["theorem energy_conservation_holds", "theorem momentum_conservation_holds", "by decide +kernel", "Mark.flatten_ok"] {
+    for t in [
+        "theorem energy_conservation_holds",
+        "theorem momentum_conservation_holds",
+        "by decide +kernel",
+        "Mark.flatten_ok",
+    ] {
         assert!(lean.contains(t), "{t}");
     }
     // tol 1e-5 is the dyadic 5902958103587057 · 2^-69, written exactly
@@ -448,7 +454,10 @@ fn noether_claims_follow_the_symmetries() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let labels: Vec<&str> = v["claims"].as_array().unwrap().iter().map(|c| c["line"].as_str().unwrap()).collect();
     assert_eq!(v["generated"], 3, "{labels:?}");
-    assert!(labels[0].starts_with("energy_conservation PASS") && labels[0].contains("Q dissipated by ContactFloor"), "{labels:?}");
+    assert!(
+        labels[0].starts_with("energy_conservation PASS") && labels[0].contains("Q dissipated by ContactFloor"),
+        "{labels:?}"
+    );
     // the floor is frictionless: x and z survive its damping (along y) but not gravity's pull
     assert!(labels[1].starts_with("momentum_conservation(x, z) PASS"), "{labels:?}");
     // gravity and the floor's normal are both along y: rotations about y leave both alone
@@ -484,7 +493,11 @@ fn a_claim_against_the_symmetries_is_a_warning_or_with_strict_an_error() {
         ("@expect noether { tol: -1 }", "noether.tol"),
         ("@expect noether { axes: \"x\" }", "axes"),
     ] {
-        let f = scene(dir.path(), "b.lagra", &oscillator().replace("  @expect momentum_conservation\n", &format!("  {bad}\n")));
+        let f = scene(
+            dir.path(),
+            "b.lagra",
+            &oscillator().replace("  @expect momentum_conservation\n", &format!("  {bad}\n")),
+        );
         let o = lagra(&["run", f.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(2), "{bad}: {}", stdout(&o));
         assert!(stderr(&o).contains("b.lagra:") && stderr(&o).contains(msg), "{bad}: {}", stderr(&o));

@@ -80,7 +80,8 @@ impl<R: Real + Send + Sync> Lifted<R> {
             match t.kind.spec().shape {
                 Shape::Bond(_) => {
                     let seen: Vec<Cow<Site<R>>> = t.sites.iter().map(|&j| self.seen_from(t.sites[0], j)).collect();
-                    acc = fold(acc, &mut std::iter::once(term(n, &seen.iter().map(|s| s.as_ref()).collect::<Vec<_>>())));
+                    acc =
+                        fold(acc, &mut std::iter::once(term(n, &seen.iter().map(|s| s.as_ref()).collect::<Vec<_>>())));
                 }
                 Shape::External if t.sites.is_empty() => acc = fold(acc, &mut self.sites.iter().map(|s| term(n, &[s]))),
                 Shape::External => acc = fold(acc, &mut t.sites.iter().map(|&i| term(n, &[&self.sites[i]]))),
@@ -98,7 +99,10 @@ impl<R: Real + Send + Sync> Lifted<R> {
                     let chunks: Vec<&[(usize, usize)]> = pairs.chunks(CHUNK).collect();
                     let sums = in_order(chunks.len(), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
-                        fold(start, &mut chunks[k].iter().map(|&(i, j)| term(n, &[&self.sites[i], &self.seen_from(i, j)])))
+                        fold(
+                            start,
+                            &mut chunks[k].iter().map(|&(i, j)| term(n, &[&self.sites[i], &self.seen_from(i, j)])),
+                        )
                     });
                     acc = sums.into_iter().reduce(&add).unwrap_or(acc);
                 }
@@ -113,7 +117,12 @@ impl<R: Real + Send + Sync> Lifted<R> {
     }
 
     pub fn potential(&self, model: &Model) -> R {
-        self.sum(model, |_| true, (self.zero.clone(), self.zero.clone(), R::add), |n, s| Some(model.terms[n].kind.potential(&self.params[n], s)))
+        self.sum(
+            model,
+            |_| true,
+            (self.zero.clone(), self.zero.clone(), R::add),
+            |n, s| Some(model.terms[n].kind.potential(&self.params[n], s)),
+        )
     }
 
     /// H = T + V (every term of the vocabulary so far has a velocity-independent potential).
@@ -124,7 +133,12 @@ impl<R: Real + Send + Sync> Lifted<R> {
     /// The rate 2·ΣF at which the dissipative terms remove energy, and which terms do.
     pub fn dissipated_power(&self, model: &Model) -> R {
         // only the instances that can dissipate: a conservative term is never visited
-        self.sum(model, |t| t.dissipates(), (self.zero.clone(), self.zero.clone(), R::add), |n, s| model.terms[n].kind.power(&self.params[n], s))
+        self.sum(
+            model,
+            |t| t.dissipates(),
+            (self.zero.clone(), self.zero.clone(), R::add),
+            |n, s| model.terms[n].kind.power(&self.params[n], s),
+        )
     }
 
     /// |x_j − x_i|, to the nearest periodic image.
@@ -135,7 +149,9 @@ impl<R: Real + Send + Sync> Lifted<R> {
     /// Σ m v, plus the share of any term with one (a magnetic field's q B × x): Noether's
     /// charge of translations.
     pub fn momentum(&self, model: &Model) -> Vec3<R> {
-        let free = std::array::from_fn(|c| self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone()));
+        let free = std::array::from_fn(|c| {
+            self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone())
+        });
         self.with_shares(model, free, 0)
     }
 
@@ -155,9 +171,12 @@ impl<R: Real + Send + Sync> Lifted<R> {
     fn with_shares(&self, model: &Model, charge: Vec3<R>, which: usize) -> Vec3<R> {
         let add = |[a0, a1, a2]: Vec3<R>, [b0, b1, b2]: Vec3<R>| [a0 + b0, a1 + b1, a2 + b2];
         let zero = std::array::from_fn(|_| self.zero.clone());
-        self.sum(model, |t| t.kind.has_charge_share(), (charge, zero, add), |n, s| {
-            model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone())
-        })
+        self.sum(
+            model,
+            |t| t.kind.has_charge_share(),
+            (charge, zero, add),
+            |n, s| model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone()),
+        )
     }
 }
 

@@ -1,9 +1,9 @@
 //! A compiled scene: the canonical model the checker sees, the initial state, the claims, the
 //! solver settings and the predictions to compare against.
 
+use crate::lang::Span;
 use crate::predict::Prediction;
 use crate::solvers::Integrator;
-use crate::lang::Span;
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 

@@ -73,7 +73,8 @@ impl Binned {
     /// The cells cut into `parts` consecutive ranges holding about as many bodies each.
     pub fn split(&self, parts: usize) -> Vec<Range<usize>> {
         let (cells, n) = (self.grid.cells(), self.order.len());
-        let bound = |k: usize| if k == parts { cells } else { self.start.partition_point(|&b| b < n * k / parts).min(cells) };
+        let bound =
+            |k: usize| if k == parts { cells } else { self.start.partition_point(|&b| b < n * k / parts).min(cells) };
         (0..parts).map(|k| bound(k)..bound(k + 1)).collect()
     }
 

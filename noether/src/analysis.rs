@@ -61,7 +61,9 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
             // Minimum image is not rotation invariant: a periodic axis other than the rotation's
             // breaks it.
             let by_box = match (model.cell, s.axis()) {
-                (Some(cell), Some(a)) if matches!(s, Symmetry::RotationX | Symmetry::RotationY | Symmetry::RotationZ) => {
+                (Some(cell), Some(a))
+                    if matches!(s, Symmetry::RotationX | Symmetry::RotationY | Symmetry::RotationZ) =>
+                {
                     (0..3).any(|b| b != a && cell.periodic[b])
                 }
                 _ => false,
@@ -74,8 +76,10 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
                     Status::Balance { by }
                 }
             } else {
-                let mut by: Vec<String> =
-                    kinds_of(model.terms.iter().filter(|t| lagrangian(t) || dissipation(t))).iter().map(|k| k.name().to_string()).collect();
+                let mut by: Vec<String> = kinds_of(model.terms.iter().filter(|t| lagrangian(t) || dissipation(t)))
+                    .iter()
+                    .map(|k| k.name().to_string())
+                    .collect();
                 if by_box {
                     by.push("the periodic box".into());
                 }
@@ -126,7 +130,9 @@ impl Analysis {
     /// the others get the checker's round-off budget.
     pub fn claims(&self, tol: f64, every: u64, declared: &[Claim], share_tol: impl Fn(ClaimKind) -> f64) -> Vec<Claim> {
         let mut out = vec![];
-        for kind in [ClaimKind::EnergyConservation, ClaimKind::MomentumConservation, ClaimKind::AngularMomentumConservation] {
+        for kind in
+            [ClaimKind::EnergyConservation, ClaimKind::MomentumConservation, ClaimKind::AngularMomentumConservation]
+        {
             if declared.iter().any(|c| c.kind == kind) {
                 continue;
             }
@@ -198,7 +204,13 @@ mod tests {
 
     #[test]
     fn a_floor_and_gravity_break_the_vertical_and_keep_the_rest() {
-        let m = model(vec![term(Kind::UniformAcceleration, &[0.0, -9.8, 0.0]), term(Kind::ContactFloor, &[0.0, 1e4, 5.0, 0.5, 0.05])], None);
+        let m = model(
+            vec![
+                term(Kind::UniformAcceleration, &[0.0, -9.8, 0.0]),
+                term(Kind::ContactFloor, &[0.0, 1e4, 5.0, 0.5, 0.05]),
+            ],
+            None,
+        );
         let a = analyse(&m, Table::derived());
         assert_eq!(broken_by(&a, Symmetry::TranslationY), ["UniformAcceleration", "ContactFloor"]);
         // the floor's friction breaks the horizontal momenta too (it pushes against v_t)
@@ -236,7 +248,10 @@ mod tests {
         assert_eq!(a.law(Symmetry::Time).status, Status::Balance { by: vec![Kind::HarmonicBond] });
         let declared = [Claim::new(ClaimKind::EnergyConservation, Some(1e-5), 1)];
         let claims = a.claims(1e-4, 1, &declared, |_| unreachable!());
-        assert_eq!(claims.iter().map(|c| c.kind).collect::<Vec<_>>(), [ClaimKind::MomentumConservation, ClaimKind::AngularMomentumConservation]);
+        assert_eq!(
+            claims.iter().map(|c| c.kind).collect::<Vec<_>>(),
+            [ClaimKind::MomentumConservation, ClaimKind::AngularMomentumConservation]
+        );
         assert!(claims.iter().all(|c| c.axes.is_none() && a.supports(c)));
     }
 

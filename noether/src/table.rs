@@ -152,7 +152,8 @@ impl Table {
     /// tested; a missing entry reads as broken, never as invariant.
     pub fn derived() -> &'static Table {
         static TABLE: OnceLock<Table> = OnceLock::new();
-        TABLE.get_or_init(|| serde_json::from_str(DERIVED).expect("noether/derived.json is the derivation's own output"))
+        TABLE
+            .get_or_init(|| serde_json::from_str(DERIVED).expect("noether/derived.json is the derivation's own output"))
     }
 
     pub fn of(&self, kind: Kind) -> Option<&TermSymmetries> {
@@ -166,7 +167,13 @@ pub fn parameter_names(kind: Kind) -> Vec<String> {
     kind.spec()
         .params
         .iter()
-        .flat_map(|p| if p.len == 1 { vec![p.name.to_string()] } else { (0..p.len).map(|i| format!("{}_{i}", p.name)).collect() })
+        .flat_map(|p| {
+            if p.len == 1 {
+                vec![p.name.to_string()]
+            } else {
+                (0..p.len).map(|i| format!("{}_{i}", p.name)).collect()
+            }
+        })
         .collect()
 }
 

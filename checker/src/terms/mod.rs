@@ -219,9 +219,20 @@ impl Kind {
         };
         let s = vec![&site; spec.shape.arity()];
         // a vector is homogeneous when its components are alike: their sum says so
-        let sum = |v: Vec3<Dimension>| { let [a, b, c] = v; a + b + c };
-        let [momentum, angular] = self.charge_share(&p, &s).map(|[m, a]| [Some(sum(m)), Some(sum(a))]).unwrap_or([None, None]);
-        [Some(self.potential(&p, &s)), self.rayleigh(&p, &s), self.power(&p, &s), self.gyroscopic(&p, &s), momentum, angular]
+        let sum = |v: Vec3<Dimension>| {
+            let [a, b, c] = v;
+            a + b + c
+        };
+        let [momentum, angular] =
+            self.charge_share(&p, &s).map(|[m, a]| [Some(sum(m)), Some(sum(a))]).unwrap_or([None, None]);
+        [
+            Some(self.potential(&p, &s)),
+            self.rayleigh(&p, &s),
+            self.power(&p, &s),
+            self.gyroscopic(&p, &s),
+            momentum,
+            angular,
+        ]
     }
 
     /// Whether the definition has a share of the momenta (worked out once per kind).

@@ -141,8 +141,10 @@ const CHUNKS: usize = 4;
 impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
         let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
-        let list =
-            reach.filter(|_| (LIST_FROM..Pair::BODIES).contains(&m.bodies.len())).and_then(|r| Neighbours::new(&m.cell, r)).map(Mutex::new);
+        let list = reach
+            .filter(|_| (LIST_FROM..Pair::BODIES).contains(&m.bodies.len()))
+            .and_then(|r| Neighbours::new(&m.cell, r))
+            .map(Mutex::new);
         let rows = t.iter().map(|t| T::row(&t.params)).collect();
         Box::new(Pairs::<T> {
             name: kind.name(),
@@ -177,8 +179,11 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                     } else {
                         ([0.0; 4], 0.0)
                     };
-                    let (a, e) = T::eval(p, d, mq, colour)
-                        .map_err(|what| Singularity { term: self.name, bodies: vec![body(i), body(j)], what })?;
+                    let (a, e) = T::eval(p, d, mq, colour).map_err(|what| Singularity {
+                        term: self.name,
+                        bodies: vec![body(i), body(j)],
+                        what,
+                    })?;
                     for c in 0..3 {
                         fi[c] += a[c];
                         f[j][c] -= a[c];
@@ -237,9 +242,11 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
             for p in &self.rows {
-                let (a, e) = T::eval(p, d, mq, colour)
-                    .and_then(Finite::finite)
-                    .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                let (a, e) = T::eval(p, d, mq, colour).and_then(Finite::finite).map_err(|what| Singularity {
+                    term: self.name,
+                    bodies: vec![i, j],
+                    what,
+                })?;
                 // applied so that the two are exactly opposite
                 for c in 0..3 {
                     f[i][c] += a[c];

@@ -14,7 +14,8 @@ impl Bonded<2> for Fast {
         }
         // one division per bond; the damping's ṙ only where there is damping
         let inv = 1.0 / r;
-        let damping = if gamma == 0.0 { 0.0 } else { gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv };
+        let damping =
+            if gamma == 0.0 { 0.0 } else { gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv };
         let s = (k * (r - r0) + damping) * inv;
         let a = d.map(|c| c * s);
         Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))

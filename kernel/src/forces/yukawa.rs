@@ -12,7 +12,12 @@ impl Paired for Fast {
         [p[0], p[1]]
     }
     #[inline(always)]
-    fn eval(p: &[f64; 2], d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
+    fn eval(
+        p: &[f64; 2],
+        d: [f64; 3],
+        [_, _, qi, qj]: [f64; 4],
+        _colour: f64,
+    ) -> Result<([f64; 3], f64), &'static str> {
         screened(p[0] * qi * qj, p[1], d)
     }
 }

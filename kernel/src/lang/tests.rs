@@ -348,6 +348,10 @@ fn lattice_errors() {
     );
     assert_eq!(
         lattice_error("seed: 5", "seed: 5, colour: red"),
-        at(3, 99, "unknown field `colour` for lattice; expected type, kind, density, cells, temperature, seed, velocities")
+        at(
+            3,
+            99,
+            "unknown field `colour` for lattice; expected type, kind, density, cells, temperature, seed, velocities"
+        )
     );
 }

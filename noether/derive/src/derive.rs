@@ -118,9 +118,9 @@ impl Vars {
         for i in 0..self.x.len() {
             for c in 0..3 {
                 let coeff = simplify(&dl.derivative(self.v[i][c]));
-                let constant = (0..self.x.len())
-                    .all(|j| (0..3).all(|d| is_zero(&coeff.derivative(self.x[j][d])) && is_zero(&coeff.derivative(self.v[j][d]))))
-                    && is_zero(&coeff.derivative(self.t));
+                let constant = (0..self.x.len()).all(|j| {
+                    (0..3).all(|d| is_zero(&coeff.derivative(self.x[j][d])) && is_zero(&coeff.derivative(self.v[j][d])))
+                }) && is_zero(&coeff.derivative(self.t));
                 if !constant {
                     return None;
                 }
@@ -174,11 +174,14 @@ fn subsets(n: usize, size: usize) -> Vec<Vec<usize>> {
     if size == 0 {
         return vec![vec![]];
     }
-    (0..n).flat_map(|first| subsets(n, size - 1).into_iter().filter(move |r| r.first().is_none_or(|&f| f > first)).map(move |mut r| {
-        r.insert(0, first);
-        r
-    }))
-    .collect()
+    (0..n)
+        .flat_map(|first| {
+            subsets(n, size - 1).into_iter().filter(move |r| r.first().is_none_or(|&f| f > first)).map(move |mut r| {
+                r.insert(0, first);
+                r
+            })
+        })
+        .collect()
 }
 
 /// Expanded, and over a common denominator when that is what cancels.
@@ -218,12 +221,18 @@ pub fn term(kind: Kind) -> TermSymmetries {
         }
     };
     let rayleigh = kind.rayleigh(&p, &refs).map(|f| f.0);
-    let mut row = TermSymmetries { lagrangian: BTreeMap::new(), dissipation: BTreeMap::new(), charge_share: BTreeMap::new() };
+    let mut row =
+        TermSymmetries { lagrangian: BTreeMap::new(), dissipation: BTreeMap::new(), charge_share: BTreeMap::new() };
     for s in Symmetry::ALL {
         // time: no term depends on t explicitly, so its Lagrangian is invariant by construction
         let (verdict, boundary) = match s {
-            Symmetry::Time => (if lagrangian.contains_symbol(vars.t) { Verdict::Broken } else { Verdict::Invariant }, None),
-            _ => vars.verdict(&vars.vary(&lagrangian, s), !matches!(s, Symmetry::BoostX | Symmetry::BoostY | Symmetry::BoostZ)),
+            Symmetry::Time => {
+                (if lagrangian.contains_symbol(vars.t) { Verdict::Broken } else { Verdict::Invariant }, None)
+            }
+            _ => vars.verdict(
+                &vars.vary(&lagrangian, s),
+                !matches!(s, Symmetry::BoostX | Symmetry::BoostY | Symmetry::BoostZ),
+            ),
         };
         row.lagrangian.insert(s, verdict.clone());
         if let Some(f) = &rayleigh {
@@ -234,7 +243,11 @@ pub fn term(kind: Kind) -> TermSymmetries {
             row.dissipation.insert(s, vars.verdict(&variation, false).0);
         }
         // the share of the charge: Σ ∂L_gyro/∂vᵢ·ξᵢ − K, for the symmetries that have one
-        if let (Some(g), false, true) = (&gyro, verdict == Verdict::Broken, s.axis().is_some() && !matches!(s, Symmetry::BoostX | Symmetry::BoostY | Symmetry::BoostZ)) {
+        if let (Some(g), false, true) = (
+            &gyro,
+            verdict == Verdict::Broken,
+            s.axis().is_some() && !matches!(s, Symmetry::BoostX | Symmetry::BoostY | Symmetry::BoostZ),
+        ) {
             let mut terms = vec![];
             for i in 0..vars.x.len() {
                 let (dx, _) = vars.generator(s, i).expect("a generator");

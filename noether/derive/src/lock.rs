@@ -21,11 +21,19 @@ impl Exclusive {
     /// Takes the lock, waiting for another derivation to finish if one holds it.
     pub fn take() -> Result<Exclusive, String> {
         let p = path();
-        let f = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| format!("cannot open {}: {e}", p.display()))?;
+        let f = OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&p)
+            .map_err(|e| format!("cannot open {}: {e}", p.display()))?;
         match f.try_lock() {
             Ok(()) => Ok(Exclusive { _file: f }),
             Err(TryLockError::WouldBlock) => {
-                eprintln!("lagra-derive: another symbolica derivation is running (lock {}); waiting for it", p.display());
+                eprintln!(
+                    "lagra-derive: another symbolica derivation is running (lock {}); waiting for it",
+                    p.display()
+                );
                 f.lock().map_err(|e| format!("cannot lock {}: {e}", p.display()))?;
                 Ok(Exclusive { _file: f })
             }

@@ -34,7 +34,10 @@ fn main() -> ExitCode {
         let same = std::fs::read_to_string(path).is_ok_and(|old| &old == text);
         if check {
             if !same {
-                eprintln!("lagra-derive: {} is stale: run `cargo run --release -p lagra-noether-derive`", path.display());
+                eprintln!(
+                    "lagra-derive: {} is stale: run `cargo run --release -p lagra-noether-derive`",
+                    path.display()
+                );
                 stale = true;
             }
         } else if let Err(e) = std::fs::write(path, text) {
@@ -44,5 +47,9 @@ fn main() -> ExitCode {
             eprintln!("lagra-derive: wrote {}", path.display());
         }
     }
-    if stale { ExitCode::FAILURE } else { ExitCode::SUCCESS }
+    if stale {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
 }

@@ -44,8 +44,12 @@ pub fn markdown(t: &Table) -> String {
         for s in Symmetry::ALL {
             let l = cell(&row.lagrangian[&s]);
             match row.dissipation.get(&s) {
-                Some(d) => { let _ = write!(out, " {l} / {} |", cell(d)); }
-                None => { let _ = write!(out, " {l} |"); }
+                Some(d) => {
+                    let _ = write!(out, " {l} / {} |", cell(d));
+                }
+                None => {
+                    let _ = write!(out, " {l} |");
+                }
             }
         }
         out += "\n";

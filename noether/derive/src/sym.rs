@@ -44,7 +44,8 @@ pub fn exact(c: f64) -> Atom {
     }
     let bits = c.to_bits();
     let (sign, exponent, fraction) = (bits >> 63, ((bits >> 52) & 0x7ff) as i64, bits & ((1 << 52) - 1));
-    let (mut m, mut e) = if exponent == 0 { (fraction as i64, -1074) } else { ((fraction | (1 << 52)) as i64, exponent - 1075) };
+    let (mut m, mut e) =
+        if exponent == 0 { (fraction as i64, -1074) } else { ((fraction | (1 << 52)) as i64, exponent - 1075) };
     while m % 2 == 0 {
         m /= 2;
         e += 1;

@@ -65,9 +65,15 @@ fn derivation() {
 /// `noether/derived.json` and `docs/noether.md` are what the derivation gives today.
 fn checked_in_copies_are_current(table: &Table) {
     let json = serde_json::to_string_pretty(table).unwrap() + "\n";
-    assert!(json == lagra_noether::DERIVED, "noether/derived.json is stale: run `cargo run --release -p lagra-noether-derive`");
+    assert!(
+        json == lagra_noether::DERIVED,
+        "noether/derived.json is stale: run `cargo run --release -p lagra-noether-derive`"
+    );
     let md = std::fs::read_to_string(root().join("docs/noether.md")).unwrap();
-    assert!(render::markdown(table) == md, "docs/noether.md is stale: run `cargo run --release -p lagra-noether-derive`");
+    assert!(
+        render::markdown(table) == md,
+        "docs/noether.md is stale: run `cargo run --release -p lagra-noether-derive`"
+    );
 }
 
 fn verdicts_are_the_physics(t: &Table) {
@@ -77,7 +83,11 @@ fn verdicts_are_the_physics(t: &Table) {
     // but dissipates energy unless it is zero
     for s in Symmetry::ALL {
         assert_eq!(v(Kind::HarmonicBond, s), Verdict::Invariant, "{}", s.name());
-        let diss = if s == Symmetry::Time { Verdict::WhenZero { any_of: vec![vec!["damping".into()]] } } else { Verdict::Invariant };
+        let diss = if s == Symmetry::Time {
+            Verdict::WhenZero { any_of: vec![vec!["damping".into()]] }
+        } else {
+            Verdict::Invariant
+        };
         assert_eq!(d(Kind::HarmonicBond, s), diss, "{}", s.name());
     }
     // every pair and bond term: all translations, rotations, boosts
@@ -92,15 +102,26 @@ fn verdicts_are_the_physics(t: &Table) {
         assert_eq!(v(Kind::ContactFloor, s), Verdict::Invariant, "{}", s.name());
     }
     // uniform gravity breaks the translation along g, only if g has a component there; keeps energy
-    assert_eq!(v(Kind::UniformAcceleration, Symmetry::TranslationY), Verdict::WhenZero { any_of: vec![vec!["g_1".into()]] });
+    assert_eq!(
+        v(Kind::UniformAcceleration, Symmetry::TranslationY),
+        Verdict::WhenZero { any_of: vec![vec!["g_1".into()]] }
+    );
     assert_eq!(v(Kind::UniformAcceleration, Symmetry::Time), Verdict::Invariant);
     // a magnetic field: translations up to a boundary term (the pseudo-momentum), rotation about B
     assert!(matches!(v(Kind::MagneticField, Symmetry::TranslationX), Verdict::UpToBoundary { .. }));
-    assert_eq!(v(Kind::MagneticField, Symmetry::RotationZ), Verdict::WhenZero { any_of: vec![vec!["B_0".into(), "B_1".into()]] });
+    assert_eq!(
+        v(Kind::MagneticField, Symmetry::RotationZ),
+        Verdict::WhenZero { any_of: vec![vec!["B_0".into(), "B_1".into()]] }
+    );
     // a trap keeps the rotations about an axis through its centre
-    assert!(matches!(v(Kind::HarmonicTrap, Symmetry::RotationZ), Verdict::WhenZero { any_of } if any_of.contains(&vec!["center_0".into(), "center_1".into()])));
+    assert!(
+        matches!(v(Kind::HarmonicTrap, Symmetry::RotationZ), Verdict::WhenZero { any_of } if any_of.contains(&vec!["center_0".into(), "center_1".into()]))
+    );
     // drag keeps the Lagrangian's symmetries but its dissipation breaks every charge
-    assert_eq!(d(Kind::Drag, Symmetry::TranslationX), Verdict::WhenZero { any_of: vec![vec![parameter_names(Kind::Drag)[0].clone()]] });
+    assert_eq!(
+        d(Kind::Drag, Symmetry::TranslationX),
+        Verdict::WhenZero { any_of: vec![vec![parameter_names(Kind::Drag)[0].clone()]] }
+    );
 }
 
 /// The derived charges — Σ m v and Σ m x × v plus every term's symbolic share, evaluated in f64
@@ -125,7 +146,8 @@ fn charges_agree_with_the_checker(t: &Table, path: &Path) {
         let checker = [q.momentum(&scene.model), q.angular_momentum(&scene.model)];
         for (which, name) in symbols.iter().enumerate() {
             for a in 0..3 {
-                let s = Symmetry::ALL.into_iter().find(|s| s.name() == format!("{name}_{}", ["x", "y", "z"][a])).unwrap();
+                let s =
+                    Symmetry::ALL.into_iter().find(|s| s.name() == format!("{name}_{}", ["x", "y", "z"][a])).unwrap();
                 let mut derived: f64 = scene
                     .model
                     .bodies
@@ -139,7 +161,8 @@ fn charges_agree_with_the_checker(t: &Table, path: &Path) {
                 for term in &scene.model.terms {
                     let Some(share) = t.of(term.kind).and_then(|e| e.charge_share.get(&s)) else { continue };
                     let expr = parse!(share);
-                    let on: Vec<usize> = if term.sites.is_empty() { (0..x.len()).collect() } else { term.sites.clone() };
+                    let on: Vec<usize> =
+                        if term.sites.is_empty() { (0..x.len()).collect() } else { term.sites.clone() };
                     for i in on {
                         let mut values: HashMap<Atom, f64> = HashMap::new();
                         for c in 0..3 {
@@ -156,7 +179,12 @@ fn charges_agree_with_the_checker(t: &Table, path: &Path) {
                 }
                 let want = checker[which][a];
                 let scale = 1e-12 * (1.0 + want.abs());
-                assert!((derived - want).abs() <= scale, "{}: {} derived {derived}, checker {want}", path.display(), s.charge());
+                assert!(
+                    (derived - want).abs() <= scale,
+                    "{}: {} derived {derived}, checker {want}",
+                    path.display(),
+                    s.charge()
+                );
             }
         }
     }
