@@ -11,7 +11,7 @@ count() {
     skip == 1 {
       n_open = gsub(/\{/, "{"); n_close = gsub(/\}/, "}")
       depth += n_open - n_close; if (n_open > 0) opened = 1
-      if (opened && depth <= 0) skip = 0
+      if ((opened && depth <= 0) || (!opened && /;[[:space:]]*$/)) skip = 0
       next
     }
     !/^[[:space:]]*(\/\/|$)/ { n++ }

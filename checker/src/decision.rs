@@ -55,10 +55,7 @@ pub fn classify_is_sound(lo: f64, hi: f64, tol: f64, x: f64) -> bool {
 mod proofs {
     // Under kani_typecheck nothing calls the harnesses; under kani, Kani does.
     #![cfg_attr(kani_typecheck, allow(dead_code))]
-    #[cfg(kani_typecheck)]
-    use crate::kani_typecheck::any;
-    #[cfg(kani)]
-    use kani::any;
+    use crate::any;
 
     /// For every binary64 lo, hi, tol and x.
     #[cfg_attr(kani, kani::proof)]

@@ -27,10 +27,15 @@ pub mod terms;
 pub mod units;
 
 /// Stand-ins for `kani::any`, so the Kani harnesses type-check where Kani cannot be installed:
-/// `cargo rustc -p lagra-checker --lib -- --cfg kani_typecheck` (run by `.ci/run`).
+/// `cargo rustc -p lagra-checker --lib -- --cfg kani_typecheck` (run by `.ci/run`). Every
+/// harness module (`proofs`) reads `any` from here, which is Kani's own under Kani.
 #[cfg(kani_typecheck)]
 mod kani_typecheck {
     pub fn any<T: Default>() -> T {
         T::default()
     }
 }
+#[cfg(kani)]
+use kani::any;
+#[cfg(kani_typecheck)]
+use kani_typecheck::any;

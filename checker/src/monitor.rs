@@ -205,14 +205,26 @@ impl Monitor {
         self.threads = n.max(1);
     }
 
+    /// The threads a checkpoint's pair sums run on.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The first step after `after` at which `observe` has anything to do (`u64::MAX`: none):
+    /// every step until the reference is taken and while an energy balance is integrated,
+    /// otherwise the next step a claim is due. The states in between may be left out.
+    pub fn next_due(&self, after: u64) -> u64 {
+        let next = |t: &Track| next_checkpoint(t.claim.every, self.last_step, after);
+        let claims = self.tracks.iter().filter(|t| live(t)).map(next).min().unwrap_or(u64::MAX);
+        claims.min(if self.reference.is_none() || self.balance { after.saturating_add(1) } else { u64::MAX })
+    }
+
     /// Checks the claims due at this state. The first state handed in is the reference. For an
     /// energy balance every step must be handed in: the dissipated energy is integrated over all
     /// of them, whatever the claim's `every`.
     pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
         let last = self.last_step;
-        let due = |t: &Track| {
-            t.claim.kind.is_dynamic() && t.stopped.is_none() && (s.step.is_multiple_of(t.claim.every) || s.step == last)
-        };
+        let due = |t: &Track| live(t) && (s.step.is_multiple_of(t.claim.every) || s.step == last);
         if self.reference.is_some() && self.ledger.is_none() && !self.tracks.iter().any(due) {
             return Ok(());
         }
@@ -310,6 +322,48 @@ fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: 
         mark = at(p);
     }
     mark
+}
+
+/// A dynamic claim is judged at its cadence and at the last step, until it has failed.
+fn live(t: &Track) -> bool {
+    t.claim.kind.is_dynamic() && t.stopped.is_none()
+}
+
+/// The first step after `after` that is a multiple of `every` or is `last` (`u64::MAX`: none).
+pub fn next_checkpoint(every: u64, last: u64, after: u64) -> u64 {
+    let cadence = (after / every).saturating_add(1).saturating_mul(every);
+    cadence.min(if last > after { last } else { u64::MAX })
+}
+
+/// What the kernel skipping to [`next_checkpoint`] rests on, one property body run by proptest
+/// over all of u64, by exhaustive enumeration of a small domain (the tests below) and by Kani
+/// (`proofs`): for `every` ≥ 1 the answer n is after `after`, is a checkpoint (a multiple of
+/// `every`, or `last`) or `u64::MAX` when none is left, and no checkpoint lies strictly between.
+#[cfg(any(test, kani, kani_typecheck))]
+pub fn next_checkpoint_is_the_next(every: u64, last: u64, after: u64) -> bool {
+    let n = next_checkpoint(every, last, after);
+    let checkpoint = |s: u64| s.is_multiple_of(every) || s == last;
+    // the multiple of `every` before n (if n is the last step, the last multiple before it)
+    let previous = n.saturating_sub(1) / every * every;
+    let none_left = after.checked_add(every - after % every).is_none() && last <= after;
+    every == 0
+        || (n > after || (n == u64::MAX && none_left))
+            && (checkpoint(n) || n == u64::MAX)
+            && previous <= after
+            && (last <= after || last >= n)
+}
+
+#[cfg(any(kani, kani_typecheck))]
+mod proofs {
+    // Under kani_typecheck nothing calls the harnesses; under kani, Kani does.
+    #![cfg_attr(kani_typecheck, allow(dead_code))]
+    use crate::any;
+
+    /// For every cadence, last step and step.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn next_checkpoint_is_the_next_for_every_u64() {
+        assert!(super::next_checkpoint_is_the_next(any(), any(), any()));
+    }
 }
 
 /// Whether energy is claimed on a model with a dissipating term: then the claim is a balance.
@@ -509,5 +563,71 @@ mod tests {
         let mut bad = model();
         bad.bodies[0].mass = 0.0;
         assert!(Monitor::new(bad, vec![], 1).is_err());
+    }
+
+    proptest::proptest! {
+        /// Handing in only the states `next_due` names gives the same outcome, marks and
+        /// verdicts, as handing in every state: the states left out are ones `observe` ignores.
+        #[test]
+        fn the_states_next_due_skips_change_nothing(
+            claims in proptest::collection::vec((0usize..4, 1u64..7), 0..4),
+            damping in proptest::sample::select(vec![0.0, 0.5]),
+            last in 0u64..30,
+            wobble in 0.0f64..1e-9,
+        ) {
+            let kinds = [ClaimKind::EnergyConservation, ClaimKind::MomentumConservation,
+                ClaimKind::AngularMomentumConservation, ClaimKind::DimensionalConsistency];
+            let claims: Vec<Claim> = claims.iter().map(|&(k, every)| claim(kinds[k], (k < 3).then_some(1e-6), every)).collect();
+            let mut damped = model();
+            damped.terms[0].params[2] = damping;
+            let state = |step: u64| ([[0.0; 3], [1.5 + wobble * step as f64, 0.0, 0.0]], [[1.0, 0.0, 0.0], [0.0; 3]]);
+            let run = |skip: bool| {
+                let mut m = Monitor::new(damped.clone(), claims.clone(), last).unwrap();
+                let mut step = 0;
+                let mut seen = vec![];
+                while step <= last {
+                    let (x, v) = state(step);
+                    let verdict = m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v });
+                    seen.push(step);
+                    if verdict.is_err() {
+                        break;
+                    }
+                    step = if skip { m.next_due(step).min(last.max(step + 1)) } else { step + 1 };
+                }
+                let out = m.finish();
+                (out.verdicts, out.trails, seen)
+            };
+            let (every, skipping) = (run(false), run(true));
+            proptest::prop_assert_eq!(format!("{:?}", every.0), format!("{:?}", skipping.0));
+            proptest::prop_assert_eq!(&every.1, &skipping.1);
+            // and it skips: only the checkpoints (every step for a balance)
+            let balance = damping > 0.0 && claims.iter().any(|c| c.kind == ClaimKind::EnergyConservation);
+            let due = |s: u64| s == 0 || balance || claims.iter().any(|c| c.kind.is_dynamic() && (s % c.every == 0 || s == last));
+            proptest::prop_assert!(skipping.2.iter().all(|&s| due(s) || s == last), "{:?}", skipping.2);
+        }
+    }
+
+    #[test]
+    fn next_checkpoint_is_the_next_on_a_small_domain() {
+        for every in 1..=12 {
+            for last in 0..=40 {
+                for after in 0..=45 {
+                    let brute = (after + 1..=last.max(after + 1)).find(|s| s % every == 0 || *s == last);
+                    let n = next_checkpoint(every, last, after);
+                    assert_eq!(n, brute.unwrap_or((after / every + 1) * every), "{every} {last} {after}");
+                    assert!(next_checkpoint_is_the_next(every, last, after));
+                }
+            }
+        }
+        for after in [u64::MAX - 1, u64::MAX] {
+            assert!(next_checkpoint_is_the_next(7, 3, after) && next_checkpoint_is_the_next(1, u64::MAX, after));
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn next_checkpoint_is_the_next_for_random_u64(every in 1u64.., last: u64, after: u64) {
+            proptest::prop_assert!(next_checkpoint_is_the_next(every, last, after));
+        }
     }
 }

@@ -47,10 +47,7 @@ pub fn lengths_are_exact(bodies: u64, count: u64) -> bool {
 mod proofs {
     // Under kani_typecheck nothing calls the harnesses; under kani, Kani does.
     #![cfg_attr(kani_typecheck, allow(dead_code))]
-    #[cfg(kani_typecheck)]
-    use crate::kani_typecheck::any;
-    #[cfg(kani)]
-    use kani::any;
+    use crate::any;
 
     #[cfg_attr(kani, kani::proof)]
     pub fn lengths_are_exact_for_every_u64() {

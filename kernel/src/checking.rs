@@ -6,7 +6,7 @@
 use crate::state::State;
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
-use lagra_checker::monitor::{is_balance, Halt, Monitor};
+use lagra_checker::monitor::{is_balance, next_checkpoint, Halt, Monitor};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 
@@ -34,19 +34,20 @@ pub struct Overlap<'s> {
     verdicts: Receiver<Result<(), Breach>>,
     /// A checkpoint handed over whose verdict has not been read.
     pending: bool,
-    /// The steps the checker looks at (it returns at once from the others).
-    due: Box<dyn Fn(u64) -> bool + Send + 's>,
+    /// The cadences of the dynamic claims: the checker looks at their multiples, step 0 and the
+    /// last step, and returns at once from any other state.
+    every: Vec<u64>,
+    last: u64,
     thread: ScopedJoinHandle<'s, Monitor>,
 }
 
 impl<'s> Checking<'s> {
     /// The monitor on a second thread of `scope`, judging the states due for `claims`.
     pub fn overlapped<'e>(scope: &'s Scope<'s, 'e>, mut monitor: Monitor, claims: &[Claim], last: u64) -> Self {
-        let every: Vec<u64> = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
-        let due = Box::new(move |step: u64| step == 0 || step == last || every.iter().any(|&e| step.is_multiple_of(e)));
+        let every = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
         let (states, inbox) = sync_channel::<State>(1);
         let (outbox, verdicts) = sync_channel(1);
-        let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let cpus = monitor.threads();
         let thread = scope.spawn(move || {
             for s in inbox {
                 // one thread while the kernel steps on; every CPU for the last checkpoint, which
@@ -59,7 +60,7 @@ impl<'s> Checking<'s> {
             }
             monitor
         });
-        Checking::Overlapped(Overlap { states, verdicts, pending: false, due, thread })
+        Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, thread })
     }
 
     /// Shows the checker a state. Inline, the answer is about this state; overlapped, it is
@@ -67,13 +68,22 @@ impl<'s> Checking<'s> {
     pub fn show(&mut self, s: &State) -> Result<(), Breach> {
         match self {
             Checking::Inline(m) => m.observe(&s.snapshot()).map_err(|h| (h, s.clone())),
-            Checking::Overlapped(o) if (o.due)(s.step) => {
+            Checking::Overlapped(o) if s.step == 0 || o.next_due(s.step - 1) == s.step => {
                 o.settle()?;
                 o.states.send(s.clone()).expect("the checker thread takes states until the run ends");
                 o.pending = true;
                 Ok(())
             }
             Checking::Overlapped(_) => Ok(()),
+        }
+    }
+
+    /// The first step after `after` the checker needs to see (`u64::MAX`: none); the kernel may
+    /// step through the ones in between without showing them.
+    pub fn next_due(&self, after: u64) -> u64 {
+        match self {
+            Checking::Inline(m) => m.next_due(after),
+            Checking::Overlapped(o) => o.next_due(after),
         }
     }
 
@@ -99,6 +109,10 @@ impl<'s> Checking<'s> {
 }
 
 impl Overlap<'_> {
+    fn next_due(&self, after: u64) -> u64 {
+        self.every.iter().map(|&e| next_checkpoint(e, self.last, after)).min().unwrap_or(u64::MAX)
+    }
+
     fn settle(&mut self) -> Result<(), Breach> {
         if !std::mem::take(&mut self.pending) {
             return Ok(());
@@ -159,5 +173,38 @@ mod tests {
         let (a, b) = both(&melt(1e-9));
         assert!(matches!(a.stop, Some(Stop::Checker(_))) && a.steps < 60 && a.steps % 10 == 0, "{:?}", a.stop);
         same(&a, &b);
+    }
+
+    /// Shown every state (as when they are recorded) or only its checkpoints (the solver then
+    /// steps straight from one to the next), a run ends the same: a pass, a certified breach,
+    /// and an instability past the stability limit, found at the same step.
+    #[test]
+    fn stepping_straight_to_the_checkpoints_changes_nothing() {
+        // ωdt = 0.11, and 3.2: past Verlet's limit of 2, where the force overflows long before
+        // the claims' only checkpoint at the end
+        for (tol, dt, every, ends) in [
+            (1e-2, 0.05, 7, "None"),
+            (1e-5, 0.05, 7, "Some(Checker(Breach"),
+            (1.0, 1.5, 1000, "Some(Singular { step: 172"),
+        ] {
+            let scene = compile(&format!(
+                "scene s {{ entity {{ position: [0, 0, 0], mass: 1 }} entity {{ position: [1.3, 0.1, 0], mass: 2 }}
+                   bond harmonic [0, 1] {{ k: 3, r0: 1 }}
+                   @expect energy_conservation {{ tol: {tol}, every: {every} }}
+                   @expect momentum_conservation {{ every: {every} }}
+                   solver {{ dt: {dt}, steps: 400 }} }}"
+            ))
+            .unwrap();
+            let straight = run(&scene, Options { steps: None, trace: None, record: None, threads: 1 }).unwrap();
+            let mut shown = 0;
+            let mut each = |_: &lagra_checker::model::Snapshot| -> std::io::Result<()> {
+                shown += 1;
+                Ok(())
+            };
+            let every = run(&scene, Options { steps: None, trace: None, record: Some(&mut each), threads: 1 }).unwrap();
+            same(&straight, &every);
+            assert_eq!(shown, every.steps + 1);
+            assert!(format!("{:?}", every.stop).starts_with(ends), "{:?}", every.stop);
+        }
     }
 }

@@ -102,6 +102,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // Every state the run produces is recorded and shown to the checker, in order; a breach
     // (found at this state, or, overlapped, at the checkpoint before) replaces the run's state.
     let mut record = opts.record.take();
+    // the states a meter or the state file sees are every state; a trace sees the frames, the
+    // checker its checkpoints: the solver steps straight to the next of them
+    let every_step = record.is_some() || !meters.is_empty();
     let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
@@ -126,8 +129,11 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 stop = check(&mut checking, &mut state)?;
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                 trace(&state, solver.potential())?;
+                let frame = scene.solver.steps_per_frame;
                 while stop.is_none() && state.step < steps {
-                    if let Err(e) = solver.step(&graph, &mut state, dt) {
+                    let next_frame = if tracing { (state.step / frame + 1) * frame } else { u64::MAX };
+                    let until = if every_step { state.step + 1 } else { checking.next_due(state.step).min(next_frame) };
+                    if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
                         stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
                         break;
                     }

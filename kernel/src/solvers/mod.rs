@@ -46,13 +46,35 @@ impl Stepper {
 
     /// One step of `dt`: the state's step counter and clock advance with it (t = step·dt).
     pub fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Singularity> {
+        self.advance_to(g, s, dt, s.step + 1)
+    }
+
+    /// Steps until the state is at step `until`, or stops after the first step that leaves the
+    /// potential energy non-finite (where the run must stop). The steps in between are seen by
+    /// no one, so nothing else runs between them; the integrator is chosen once, not per step.
+    pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Singularity> {
         match self.integrator {
-            Integrator::VelocityVerlet => self.vv.advance(g, s, dt)?,
-            Integrator::Yoshida4 => yoshida::advance(&mut self.vv, g, s, dt)?,
-            Integrator::Rk4 => self.vv.potential = rk4::advance(g, s, dt, &mut self.vv.f)?,
+            Integrator::VelocityVerlet => self.repeat(g, s, dt, until, VelocityVerlet::advance),
+            Integrator::Yoshida4 => self.repeat(g, s, dt, until, yoshida::advance),
+            Integrator::Rk4 => self.repeat(g, s, dt, until, |vv, g, s, dt| {
+                vv.potential = rk4::advance(g, s, dt, &mut vv.f)?;
+                Ok(())
+            }),
         }
-        s.step += 1;
-        s.t = s.step as f64 * dt;
+    }
+
+    fn repeat<F>(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64, one: F) -> Result<(), Singularity>
+    where
+        F: Fn(&mut VelocityVerlet, &LagrangianGraph, &mut State, f64) -> Result<(), Singularity>,
+    {
+        while s.step < until {
+            one(&mut self.vv, g, s, dt)?;
+            s.step += 1;
+            s.t = s.step as f64 * dt;
+            if !self.vv.potential.is_finite() {
+                break;
+            }
+        }
         Ok(())
     }
 
