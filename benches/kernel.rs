@@ -136,7 +136,7 @@ fn end_to_end(c: &mut Criterion) {
         group.throughput(Throughput::Elements(steps));
         group.bench_function(BenchmarkId::new("steps", &s.name), |b| {
             b.iter(|| {
-                let opts = Options { steps: Some(steps), trace: None, record: None, threads: 1 };
+                let opts = Options { steps: Some(steps), trace: None, record: None, threads: 1, progress: None };
                 black_box(run(&s, opts).expect("the run").steps)
             })
         });

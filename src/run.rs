@@ -10,9 +10,10 @@ use lagra_kernel::lang::compile;
 use lagra_kernel::run::{run, Options};
 use sha2::{Digest, Sha256};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -41,10 +42,65 @@ pub struct Args {
     /// Print how each term group visits its bodies (every pair, cell list, Verlet list, chunks).
     #[arg(long)]
     explain: bool,
+    /// A progress line on stderr (step, elapsed, time left): `auto` shows it when stderr is a
+    /// terminal and the run takes over a second.
+    #[arg(long, value_name = "WHEN", default_value = "auto")]
+    progress: When,
     /// Refuse (exit 2) a scene that declares a claim its symmetries cannot support (momentum
     /// along a floor's normal); without it that is a warning.
     #[arg(long)]
     strict: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum When {
+    Auto,
+    Always,
+    Never,
+}
+
+/// The progress line: on a terminal one line rewritten in place (from a second into the run,
+/// twice a second), elsewhere (`always`) a line per report.
+struct Progress {
+    planned: u64,
+    terminal: bool,
+    start: Instant,
+    shown: Option<Instant>,
+}
+
+impl Progress {
+    fn new(when: When, planned: u64) -> Option<Progress> {
+        let terminal = std::io::stderr().is_terminal();
+        let on = when == When::Always || (when == When::Auto && terminal);
+        on.then(|| Progress { planned, terminal, start: Instant::now(), shown: None })
+    }
+
+    fn at(&mut self, step: u64) {
+        let (now, elapsed) = (Instant::now(), self.start.elapsed().as_secs_f64());
+        let due = self.shown.is_none_or(|t| now - t >= Duration::from_millis(500));
+        if !due || (self.terminal && elapsed < 1.0) {
+            return;
+        }
+        let mut line =
+            format!("step {step}/{} ({:.0}%), {elapsed:.1} s", self.planned, 100.0 * step as f64 / self.planned as f64);
+        // an estimate from the first half second would be mostly start-up
+        if elapsed >= 0.5 {
+            line += &format!(", about {:.0} s left", elapsed * (self.planned - step) as f64 / step.max(1) as f64);
+        }
+        if self.terminal {
+            eprint!("\r{line}\x1b[K");
+        } else {
+            eprintln!("lagra: {line}");
+        }
+        self.shown = Some(now);
+    }
+
+    /// Clears a terminal's line before the report.
+    fn done(&self) {
+        if self.terminal && self.shown.is_some() {
+            eprint!("\r\x1b[K");
+        }
+    }
 }
 
 /// Bad input: the message on stderr, exit code 2.
@@ -91,6 +147,9 @@ pub fn main(a: Args) -> ExitCode {
         Err(e) => return bad(format!("cannot create the state file: {e}")),
     };
     let mut record = recorder(|s| states.as_mut().map_or(Ok(()), |w| w.push(s)));
+    let mut progress = Progress::new(a.progress, a.steps.unwrap_or(scene.solver.steps));
+    let shown = progress.is_some();
+    let mut tick = |step: u64| progress.as_mut().into_iter().for_each(|p| p.at(step));
     let result = run(
         &scene,
         Options {
@@ -98,8 +157,10 @@ pub fn main(a: Args) -> ExitCode {
             trace: trace.as_mut().map(|w| w as &mut dyn Write),
             record: a.states.is_some().then_some(&mut record),
             threads: a.threads,
+            progress: shown.then_some(&mut tick),
         },
     );
+    progress.iter().for_each(Progress::done);
     let flushed = trace.map(|mut t| t.flush()).transpose();
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,

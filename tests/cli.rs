@@ -252,6 +252,23 @@ fn json_report_has_the_timing_fields() {
     assert_eq!(stdout(&o).matches("\"claim\"").count(), v["claims"].as_array().unwrap().len());
 }
 
+/// `--progress always` reports the steps on stderr and changes nothing in the report;
+/// `never` (and `auto`, off a terminal) keeps stderr empty; anything else is a usage error.
+#[test]
+fn progress_goes_to_stderr_and_changes_nothing() {
+    let run = |when: &str| lagra(&["run", "scenes/oscillator.lagra", "--steps", "3000", "--progress", when]);
+    let (always, never, auto) = (run("always"), run("never"), run("auto"));
+    assert_eq!(always.status.code(), Some(0));
+    assert!(stderr(&always).starts_with("lagra: step 1/3000 (0%)"), "{}", stderr(&always));
+    assert!(stderr(&never).is_empty() && stderr(&auto).is_empty());
+    // the same report but for the wall-clock line
+    let report = |o: &Output| stdout(o).lines().filter(|l| !l.starts_with("wall")).collect::<Vec<_>>().join("\n");
+    assert_eq!(report(&always), report(&never));
+    let bad = run("sometimes");
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("possible values: auto, always, never"), "{}", stderr(&bad));
+}
+
 /// The language reference's table of terms is the one `lagra terms` prints from the checker.
 #[test]
 fn the_language_reference_lists_the_vocabulary_as_it_is() {

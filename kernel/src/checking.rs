@@ -143,9 +143,12 @@ mod tests {
     /// A run with a trace cannot overlap (the trace would show states past a breach): the
     /// reference, inline.
     fn both(scene: &crate::scene::Scene) -> (Report, Report) {
-        let overlapped = run(scene, Options { steps: None, trace: None, record: None, threads: 1 }).unwrap();
+        let overlapped =
+            run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
         let mut sink = std::io::sink();
-        let inline = run(scene, Options { steps: None, trace: Some(&mut sink), record: None, threads: 1 }).unwrap();
+        let inline =
+            run(scene, Options { steps: None, trace: Some(&mut sink), record: None, threads: 1, progress: None })
+                .unwrap();
         assert!(overlapped.checker.starts_with("on a second thread") && inline.checker.starts_with("inline"));
         (overlapped, inline)
     }
@@ -175,6 +178,14 @@ mod tests {
         same(&a, &b);
     }
 
+    /// A run with a progress report, and the steps it was called at.
+    fn with_progress(scene: &crate::scene::Scene) -> (Report, Vec<u64>) {
+        let mut reached = vec![];
+        let mut tick = |step: u64| reached.push(step);
+        let r = run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: Some(&mut tick) });
+        (r.unwrap(), reached)
+    }
+
     /// Shown every state (as when they are recorded) or only its checkpoints (the solver then
     /// steps straight from one to the next), a run ends the same: a pass, a certified breach,
     /// and an instability past the stability limit, found at the same step.
@@ -195,16 +206,44 @@ mod tests {
                    solver {{ dt: {dt}, steps: 400 }} }}"
             ))
             .unwrap();
-            let straight = run(&scene, Options { steps: None, trace: None, record: None, threads: 1 }).unwrap();
+            let straight =
+                run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
             let mut shown = 0;
             let mut each = |_: &lagra_checker::model::Snapshot| -> std::io::Result<()> {
                 shown += 1;
                 Ok(())
             };
-            let every = run(&scene, Options { steps: None, trace: None, record: Some(&mut each), threads: 1 }).unwrap();
+            let every =
+                run(&scene, Options { steps: None, trace: None, record: Some(&mut each), threads: 1, progress: None })
+                    .unwrap();
             same(&straight, &every);
             assert_eq!(shown, every.steps + 1);
             assert!(format!("{:?}", every.stop).starts_with(ends), "{:?}", every.stop);
+            // a progress report stops the solver too (for two bodies, every 2¹⁹ steps: here
+            // only at the checkpoints and the end), and changes nothing either
+            let (watched, reached) = with_progress(&scene);
+            same(&straight, &watched);
+            assert!(
+                reached.windows(2).all(|w| w[0] < w[1]) && reached.last() == Some(&watched.steps)
+                    || matches!(watched.stop, Some(Stop::Singular { .. })),
+                "{reached:?}"
+            );
         }
+    }
+
+    /// Progress stops a two-body run every 2¹⁹ steps (a million atom-steps), and the run ends
+    /// with the bits it has without it.
+    #[test]
+    fn progress_reports_every_million_atom_steps() {
+        let scene = compile(
+            "scene s { entity { position: [0, 0, 0], mass: 1 } entity { position: [1.3, 0.1, 0], mass: 2 }
+               bond harmonic [0, 1] { k: 3, r0: 1 } solver { dt: 0.01, steps: 1200000 } }",
+        )
+        .unwrap();
+        let plain =
+            run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
+        let (watched, reached) = with_progress(&scene);
+        same(&plain, &watched);
+        assert_eq!(reached, [1 << 19, 1 << 20, 1_200_000]);
     }
 }

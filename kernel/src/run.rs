@@ -64,6 +64,9 @@ pub struct Options<'a> {
     pub record: Option<Recorder<'a>>,
     /// Threads for the forces (the results are the same bits for any count).
     pub threads: usize,
+    /// Called with the step reached about every million atom-steps, for a progress line (the
+    /// run's results are the same with or without it).
+    pub progress: Option<&'a mut dyn FnMut(u64)>,
 }
 
 #[derive(Serialize)]
@@ -105,6 +108,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // the states a meter or the state file sees are every state; a trace sees the frames, the
     // checker its checkpoints: the solver steps straight to the next of them
     let every_step = record.is_some() || !meters.is_empty();
+    let mut progress = opts.progress.take();
+    let stride = if progress.is_some() { ((1u64 << 20) / scene.x0.len().max(1) as u64).max(1) } else { u64::MAX };
     let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
@@ -129,10 +134,15 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 stop = check(&mut checking, &mut state)?;
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                 trace(&state, solver.potential())?;
-                let frame = scene.solver.steps_per_frame;
+                let frame = scene.solver.steps_per_frame.max(1);
+                let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
                 while stop.is_none() && state.step < steps {
-                    let next_frame = if tracing { (state.step / frame + 1) * frame } else { u64::MAX };
-                    let until = if every_step { state.step + 1 } else { checking.next_due(state.step).min(next_frame) };
+                    let next_frame = if tracing { next(frame, state.step) } else { u64::MAX };
+                    let until = if every_step {
+                        state.step + 1
+                    } else {
+                        checking.next_due(state.step).min(next_frame).min(next(stride, state.step))
+                    };
                     if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
                         stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
                         break;
@@ -142,8 +152,11 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         stop = non_finite(&state);
                     }
                     meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-                    if tracing && (state.step.is_multiple_of(scene.solver.steps_per_frame) || state.step == steps) {
+                    if tracing && (state.step.is_multiple_of(frame) || state.step == steps) {
                         trace(&state, solver.potential())?;
+                    }
+                    if let Some(p) = progress.as_mut() {
+                        p(state.step);
                     }
                 }
                 if stop.is_none() {
