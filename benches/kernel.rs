@@ -102,7 +102,7 @@ fn neighbour_build(c: &mut Criterion) {
     group.bench_function("lj_32k", |b| {
         b.iter(|| {
             let mut list = Neighbours::new(&lj.model.cell, 2.5).expect("a box that takes a list");
-            list.update(black_box(&lj.x0), &lj.model.cell);
+            list.update(black_box(&lj.x0), &lj.model.cell, None);
             black_box(list.count())
         })
     });

@@ -77,13 +77,8 @@ fn witnesses(model: &Model, s: &State) -> Witnesses {
         match t.kind.spec().shape {
             Shape::Pairwise => {
                 // the pairs within reach (the others add exact zeros)
-                let reach = t.kind.reach(&t.params);
-                let within = |i: usize, j: usize| {
-                    let d = seen(i, j).x.iter().zip(&s.x[i]).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
-                    reach.is_none_or(|r| d < r * r)
-                };
-                let pairs = broad_phase::candidates(&s.x, &model.cell, reach, within).into_iter();
-                energy.extend(pairs.map(|(i, j)| v(&[site(i), seen(i, j)])));
+                let pairs = broad_phase::within(&s.x, &model.cell, t.kind.reach(&t.params));
+                energy.extend(pairs.iter().map(|p| v(&[site(p.i), seen(p.i, p.j)])));
             }
             Shape::Bond(_) => energy.push(v(&t.sites.iter().map(|&j| seen(t.sites[0], j)).collect::<Vec<_>>())),
             Shape::External if t.sites.is_empty() => energy.extend((0..s.x.len()).map(|i| v(&[site(i)]))),

@@ -1,44 +1,106 @@
-//! Which pairs of bodies a pair term must look at: every pair whose nearest-image distance could
-//! be within its reach. A superset is sound (a pair beyond reach then contributes exactly zero
-//! through the exact test that follows); a missed pair is not, so the argument is kept simple:
-//! bodies are binned into cells wider than the reach by 1% — far more than any rounding in the
-//! binning — and two bodies whose cells are not adjacent (cyclically, on a periodic axis) are
-//! farther apart than the reach. Where no such grid fits (few bodies, a periodic axis shorter
-//! than three cells, bodies scattered so far that cells would outnumber them) every pair is a
-//! candidate. The candidates come out sorted, in the order of the double loop over every pair,
-//! so the sums built from them do not depend on the grid.
+//! Which pairs of bodies a pair term must look at: every pair whose nearest-image distance is
+//! within its reach, each with the periodic image it is seen through. A pair left out must be
+//! farther than the reach, so the argument is kept simple: bodies are binned into cells wider
+//! than the reach by 1% — far more than any rounding in the binning — and two bodies whose
+//! cells are not adjacent (cyclically, on a periodic axis) are farther apart than the reach;
+//! the pairs of adjacent cells are then kept by the exact test, the nearest image's squared
+//! distance in binary64 against the reach squared (the caller's reach carries a margin far
+//! wider than that rounding). Where no such grid fits (few bodies, a periodic axis shorter than
+//! three cells, bodies scattered so far that cells would outnumber them) every pair is tested.
+//! The pairs come out sorted, in the order of the double loop over every pair, so the sums
+//! built from them do not depend on the grid.
 
 use crate::model::Cell;
+use std::ops::Range;
 
 /// Below this many bodies the double loop is as cheap as the grid.
 const GRID_FROM: usize = 64;
 
-/// The pairs (i < j), sorted, that can be within `reach` of each other (`None`: unbounded) and
-/// that `keep` keeps (filtered before they are sorted, which is most of the cost).
-pub fn candidates(
-    x: &[[f64; 3]],
-    cell: &Option<Cell>,
-    reach: Option<f64>,
-    keep: impl Fn(usize, usize) -> bool,
-) -> Vec<(usize, usize)> {
-    let n = x.len();
-    let every = || (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).filter(|&(i, j)| keep(i, j)).collect();
-    let Some(reach) = reach.filter(|r| *r > 0.0 && r.is_finite() && n >= GRID_FROM) else { return every() };
-    let Some(grid) = Grid::new(x, cell, reach * 1.01) else { return every() };
-    let cells: Vec<[usize; 3]> = x.iter().map(|p| grid.cell_of(p)).collect();
-    let mut members: Vec<Vec<usize>> = vec![vec![]; grid.n.iter().product()];
-    for (i, c) in cells.iter().enumerate() {
-        members[grid.index(*c)].push(i);
+/// Bodies `i < j`, and `shift`: the box lengths taken off j's displacement from i to reach
+/// its nearest image (`Cell::shift`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Near {
+    pub i: usize,
+    pub j: usize,
+    pub shift: [f64; 3],
+}
+
+/// The pairs, sorted, whose nearest images are within `reach` (`None`: unbounded, every pair).
+pub fn within(x: &[[f64; 3]], cell: &Option<Cell>, reach: Option<f64>) -> Vec<Near> {
+    Neighbourhood::new(x, cell, reach).of(0..x.len())
+}
+
+/// The bodies binned once, to list the pairs within reach of any run of bodies.
+pub struct Neighbourhood<'a> {
+    x: &'a [[f64; 3]],
+    cell: &'a Option<Cell>,
+    /// The reach squared (∞: unbounded).
+    limit: f64,
+    bins: Option<Bins>,
+}
+
+/// The grid, each body's cell, and the bodies by cell (cell m's are `members[start[m]..start[m
+/// + 1]]`, in increasing order).
+struct Bins {
+    grid: Grid,
+    cells: Vec<[usize; 3]>,
+    start: Vec<usize>,
+    members: Vec<usize>,
+}
+
+impl<'a> Neighbourhood<'a> {
+    pub fn new(x: &'a [[f64; 3]], cell: &'a Option<Cell>, reach: Option<f64>) -> Self {
+        let limit = reach.map_or(f64::INFINITY, |r| r * r);
+        let grid = reach
+            .filter(|r| *r > 0.0 && r.is_finite() && x.len() >= GRID_FROM)
+            .and_then(|r| Grid::new(x, cell, r * 1.01));
+        let bins = grid.map(|grid| {
+            let cells: Vec<[usize; 3]> = x.iter().map(|p| grid.cell_of(p)).collect();
+            // a counting sort by cell
+            let mut start = vec![0; grid.n.iter().product::<usize>() + 1];
+            for c in &cells {
+                start[grid.index(*c) + 1] += 1;
+            }
+            for k in 1..start.len() {
+                start[k] += start[k - 1];
+            }
+            let mut members = vec![0; x.len()];
+            let mut fill = start.clone();
+            for (i, c) in cells.iter().enumerate() {
+                members[fill[grid.index(*c)]] = i;
+                fill[grid.index(*c)] += 1;
+            }
+            Bins { grid, cells, start, members }
+        });
+        Neighbourhood { x, cell, limit, bins }
     }
-    let mut pairs = vec![];
-    for (i, c) in cells.iter().enumerate() {
-        let from = pairs.len();
-        for m in grid.around(*c) {
-            pairs.extend(members[m].iter().filter(|&&j| j > i && keep(i, j)).map(|&j| (i, j)));
+
+    /// The pair if j's nearest image is within reach of i.
+    fn near(&self, i: usize, j: usize) -> Option<Near> {
+        let d: [f64; 3] = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
+        let shift = Cell::shift(self.cell, d);
+        let e = Cell::image(self.cell, d);
+        (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= self.limit).then_some(Near { i, j, shift })
+    }
+
+    /// The pairs (i, j > i) within reach for i in `bodies`, sorted.
+    pub fn of(&self, bodies: Range<usize>) -> Vec<Near> {
+        let n = self.x.len();
+        let Some(b) = &self.bins else {
+            return bodies.flat_map(|i| (i + 1..n).filter_map(move |j| self.near(i, j))).collect();
+        };
+        let mut pairs = vec![];
+        for i in bodies {
+            let from = pairs.len();
+            b.grid.around(b.cells[i], |m| {
+                let of = &b.members[b.start[m]..b.start[m + 1]];
+                let after = of.partition_point(|&j| j <= i);
+                pairs.extend(of[after..].iter().filter_map(|&j| self.near(i, j)));
+            });
+            pairs[from..].sort_unstable_by_key(|p: &Near| p.j);
         }
-        pairs[from..].sort_unstable();
+        pairs
     }
-    pairs
 }
 
 struct Grid {
@@ -92,24 +154,24 @@ impl Grid {
         (c[0] * self.n[1] + c[1]) * self.n[2] + c[2]
     }
 
-    /// The cell and its neighbours, each once (n ≥ 3 on periodic axes keeps them distinct).
-    fn around(&self, c: [usize; 3]) -> Vec<usize> {
-        let mut out = Vec::with_capacity(27);
-        let axis = |a: usize| -> Vec<usize> {
+    /// Visits the cell and its neighbours, each once (n ≥ 3 on periodic axes keeps them
+    /// distinct).
+    fn around(&self, c: [usize; 3], mut visit: impl FnMut(usize)) {
+        let axis = |a: usize| {
             let (k, n) = (c[a] as i64, self.n[a] as i64);
             (k - 1..=k + 1)
-                .filter_map(|v| if self.periodic[a] { Some(v.rem_euclid(n)) } else { (0..n).contains(&v).then_some(v) })
+                .filter_map(
+                    move |v| if self.periodic[a] { Some(v.rem_euclid(n)) } else { (0..n).contains(&v).then_some(v) },
+                )
                 .map(|v| v as usize)
-                .collect()
         };
         for i in axis(0) {
             for j in axis(1) {
                 for k in axis(2) {
-                    out.push(self.index([i, j, k]));
+                    visit(self.index([i, j, k]));
                 }
             }
         }
-        out
     }
 }
 
@@ -118,46 +180,49 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The pairs the double loop keeps within `reach` by the exact nearest-image test.
-    fn within(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64, pairs: &[(usize, usize)]) -> Vec<(usize, usize)> {
-        pairs
-            .iter()
-            .copied()
-            .filter(|&(i, j)| {
-                let d = Cell::image(cell, std::array::from_fn(|a| x[j][a] - x[i][a]));
-                d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= reach * reach
-            })
-            .collect()
+    /// Every pair of the double loop whose nearest image is within `reach`.
+    fn double_loop(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64) -> Vec<Near> {
+        let n = x.len();
+        let mut out = vec![];
+        for i in 0..n {
+            for j in i + 1..n {
+                let d = std::array::from_fn(|a| x[j][a] - x[i][a]);
+                let e = Cell::image(cell, d);
+                if e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= reach * reach {
+                    out.push(Near { i, j, shift: Cell::shift(cell, d) });
+                }
+            }
+        }
+        out
     }
 
     proptest! {
-        /// The grid's candidates hold every pair within reach that the double loop finds, in
-        /// order — bodies drifted out of the box, on box edges, open or periodic axes.
+        /// The grid finds exactly the pairs within reach that the double loop finds, in its
+        /// order and with its images — bodies drifted out of the box, on box edges, open or
+        /// periodic axes.
         #[test]
-        fn no_pair_within_reach_is_missed(
+        fn the_grid_finds_the_pairs_of_the_double_loop(
             pts in prop::collection::vec(prop::array::uniform3(-30.0f64..60.0), 64..400),
             side in 6.0f64..20.0, periodic in prop::array::uniform3(any::<bool>()), boxed in any::<bool>(), reach in 0.5f64..3.0,
-            on_edge in 0usize..64,
+            on_edge in 0usize..64, cut in 0usize..400,
         ) {
             let mut x = pts;
             x[on_edge] = [side, 0.0, -side]; // exactly on cell and box boundaries
             let cell = boxed.then_some(Cell { size: [side; 3], periodic });
-            let n = x.len();
-            let all: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
-            let got = candidates(&x, &cell, Some(reach), |_, _| true);
-            prop_assert!(got.windows(2).all(|w| w[0] < w[1]), "sorted, no repeats");
-            prop_assert_eq!(within(&x, &cell, reach, &got), within(&x, &cell, reach, &all));
+            let all = double_loop(&x, &cell, reach);
+            prop_assert_eq!(&within(&x, &cell, Some(reach)), &all);
+            // and any run of bodies gets its own pairs
+            let near = Neighbourhood::new(&x, &cell, Some(reach));
+            let (a, b) = (cut.min(x.len()), (cut + 17).min(x.len()));
+            let run: Vec<Near> = all.iter().copied().filter(|p| (a..b).contains(&p.i)).collect();
+            prop_assert_eq!(near.of(a..b), run);
         }
     }
 
     #[test]
-    fn a_dense_periodic_box_prunes_most_pairs() {
-        let x: Vec<[f64; 3]> = (0..1000).map(|i| [(i % 10) as f64, ((i / 10) % 10) as f64, (i / 100) as f64]).collect();
-        let cell = Some(Cell { size: [10.0; 3], periodic: [true; 3] });
-        // 6 cells of 1.67 per axis, 4.6 bodies a cell: 1000 · 27 · 4.6 / 2 ≈ 62,500 candidates
-        let got = candidates(&x, &cell, Some(1.5), |_, _| true);
-        assert!(got.len() <= 62_500, "{} of 499,500", got.len());
-        assert_eq!(candidates(&x, &cell, None, |_, _| true).len(), 499_500);
-        assert_eq!(candidates(&x, &cell, None, |i, j| i + 1 == j).len(), 999, "kept before sorting");
+    fn unbounded_reach_is_every_pair() {
+        let x: Vec<[f64; 3]> = (0..100).map(|i| [i as f64, 0.0, 0.0]).collect();
+        assert_eq!(within(&x, &None, None).len(), 4950);
+        assert_eq!(within(&x, &None, Some(1.0)).len(), 99);
     }
 }

@@ -1,32 +1,16 @@
 //! What the monitor needs of a rigorous number beyond [`Real`]: absolute value, maximum, and
-//! its bounds as binary64 rounded outward. Two instances: binary64 intervals (fast) and MPFR
-//! intervals at a chosen precision (for deciding what binary64 intervals cannot).
+//! its bounds as binary64 rounded outward. Two instances: binary64 intervals
+//! ([`Outward`](crate::outward::Outward), fast) and MPFR intervals at a chosen precision (for
+//! deciding what binary64 intervals cannot).
 
 use crate::mpfi::Mpfi;
 use crate::real::Real;
-use inari::Interval;
 
 pub trait Enclosure: Real + Send + Sync {
     fn abs(self) -> Self;
     fn max(self, o: Self) -> Self;
     /// `(lo, hi)` with lo ≤ every enclosed value ≤ hi; `(NaN, NaN)` when nothing is enclosed.
     fn bounds(&self) -> (f64, f64);
-}
-
-impl Enclosure for Interval {
-    fn abs(self) -> Self {
-        Interval::abs(self)
-    }
-    fn max(self, o: Self) -> Self {
-        Interval::max(self, o)
-    }
-    fn bounds(&self) -> (f64, f64) {
-        if self.is_empty() {
-            (f64::NAN, f64::NAN)
-        } else {
-            (self.inf(), self.sup())
-        }
-    }
 }
 
 impl Enclosure for Mpfi {

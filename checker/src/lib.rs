@@ -17,6 +17,7 @@ pub mod enclosure;
 pub mod model;
 pub mod monitor;
 pub mod mpfi;
+pub mod outward;
 pub mod quantities;
 pub mod real;
 pub mod recheck;

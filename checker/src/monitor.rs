@@ -8,10 +8,9 @@ use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, 
 use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
+use crate::outward::Outward;
 use crate::quantities::Lifted;
-use crate::real::point;
 use crate::terms::Kind;
-use inari::Interval;
 use serde::{Deserialize, Serialize};
 
 /// Unit round-off of binary64.
@@ -111,8 +110,8 @@ pub struct Trail {
 /// Energy removed by dissipative terms, integrated by the trapezoid rule over every step.
 struct Ledger {
     t: f64,
-    power: Interval,
-    dissipated: Interval,
+    power: Outward,
+    dissipated: Outward,
 }
 
 struct Track {
@@ -129,7 +128,7 @@ struct Reference {
     t: f64,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
-    measures: Vec<Vec<Interval>>,
+    measures: Vec<Vec<Outward>>,
 }
 
 pub struct Monitor {
@@ -234,22 +233,24 @@ impl Monitor {
             }
             return Err(Halt::InvalidState(e));
         }
-        let q = Lifted::new(&self.model, s, &Interval::EMPTY).on_threads(self.threads);
+        let q = Lifted::new(&self.model, s, &Outward::NAN).on_threads(self.threads);
         let model = &self.model;
         let first_state = self.reference.is_none();
         if first_state {
             if self.balance {
-                self.ledger = Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: point(0.0) });
+                self.ledger =
+                    Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: Outward::point(0.0) });
             }
             let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model)).collect();
             self.reference = Some(Reference { t: s.t, x: s.x.to_vec(), v: s.v.to_vec(), measures });
         } else if let Some(l) = &mut self.ledger {
             let power = q.dissipated_power(model);
-            l.dissipated += (point(s.t) - point(l.t)) * (l.power + power) * point(0.5);
+            l.dissipated =
+                l.dissipated + (Outward::point(s.t) - Outward::point(l.t)) * (l.power + power) * Outward::point(0.5);
             (l.t, l.power) = (s.t, power);
         }
         let r = self.reference.as_ref().expect("set above");
-        let dissipated = self.ledger.as_ref().map_or(point(0.0), |l| l.dissipated);
+        let dissipated = self.ledger.as_ref().map_or(Outward::point(0.0), |l| l.dissipated);
         // Every claim due here is judged before the run halts on the first breach; a
         // conservation law has nothing to compare at its own reference state.
         let mut first = None;
@@ -260,7 +261,7 @@ impl Monitor {
             let tol = match (t.claim.fixed_tol(), t.claim.kind) {
                 (Some(tol), _) => tol,
                 (None, ClaimKind::MomentumConservation) => {
-                    t.scale = t.scale.max(weighted_speed(model, s, |_| point(1.0)));
+                    t.scale = t.scale.max(weighted_speed(model, s, |_| Outward::point(1.0)));
                     budget(t, s.step)
                 }
                 (None, _) => {
@@ -305,13 +306,13 @@ impl Monitor {
 /// Re-evaluates one checkpoint with MPFR intervals at rising precision: the first enclosure
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
-fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Interval, tol: f64) -> Mark {
+fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Outward, tol: f64) -> Mark {
     let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
         let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model);
         let then = measure(claim, &Lifted::new(model, &r0, &proto).on_threads(threads), model);
-        let (lo, hi) = deviation(claim, now, then, Mpfi::from_interval(precision, q)).bounds();
+        let (lo, hi) = deviation(claim, now, then, Mpfi::from_bounds(precision, q.bounds())).bounds();
         Mark { step: s.step, lo, hi, tol, precision }
     };
     let mut mark = at(ESCALATION[0]);
@@ -387,18 +388,18 @@ pub fn dimensions(model: &Model) -> Result<(), String> {
 }
 
 /// |a|₁ as an interval.
-fn norm1(a: &[f64; 3]) -> Interval {
-    a.iter().fold(point(0.0), |s, &c| s + point(c).abs())
+fn norm1(a: &[f64; 3]) -> Outward {
+    a.iter().fold(Outward::point(0.0), |s, &c| s + Outward::point(c).abs())
 }
 
 /// Upper bound of Σ m·w(x)·|v|₁, the scale that round-off in Σmv (w = 1) or Σm x×v (w = |x|₁)
 /// is proportional to.
-fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Interval) -> f64 {
-    let mut sum = point(0.0);
+fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Outward) -> f64 {
+    let mut sum = Outward::point(0.0);
     for (b, (x, v)) in model.bodies.iter().zip(s.x.iter().zip(s.v)) {
-        sum += point(b.mass) * w(x) * norm1(v);
+        sum = sum + Outward::point(b.mass) * w(x) * norm1(v);
     }
-    sum.sup()
+    sum.bounds().1
 }
 
 /// The declared tolerance, or the round-off budget after `step` steps.
@@ -522,10 +523,10 @@ mod tests {
         let Verdict::Pass(p) = &out.verdicts[0] else { panic!("{:?}", out.verdicts[0]) };
         assert_eq!(p.precision(), 128);
         // and binary64 intervals alone really could not: their enclosure straddles 1e-12
-        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Interval::EMPTY);
+        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Outward::NAN);
         let h = q.energy(&cancelling().0);
         let energy = claim(ClaimKind::EnergyConservation, Some(1e-12), 1);
-        let (lo, hi) = deviation(&energy, vec![h], vec![h], point(0.0)).bounds();
+        let (lo, hi) = deviation(&energy, vec![h], vec![h], Outward::point(0.0)).bounds();
         assert_eq!(classify(lo, hi, 1e-12), Class::Straddles, "[{lo}, {hi}]");
     }
 

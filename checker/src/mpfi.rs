@@ -30,12 +30,13 @@ where
 }
 
 impl Mpfi {
-    /// The binary64 interval `iv` (exactly: every binary64 value is representable at ≥ 53 bits).
-    pub fn from_interval(prec: u32, iv: Interval) -> Mpfi {
-        if iv.is_empty() {
+    /// The binary64 interval `[lo, hi]` (exactly: every binary64 value is representable at ≥ 53
+    /// bits); empty unless lo ≤ hi.
+    pub fn from_bounds(prec: u32, (lo, hi): (f64, f64)) -> Mpfi {
+        if !(lo <= hi) {
             return Mpfi::empty(prec);
         }
-        Mpfi { lo: Float::with_val(prec, iv.inf()), hi: Float::with_val(prec, iv.sup()) }
+        Mpfi { lo: Float::with_val(prec, lo), hi: Float::with_val(prec, hi) }
     }
 
     pub fn point(prec: u32, c: f64) -> Mpfi {
@@ -99,7 +100,7 @@ impl Mpfi {
         let p = self.prec();
         let (lo, hi) = self.bounds();
         match Interval::try_from((lo, hi)) {
-            Ok(iv) => Mpfi::from_interval(p, f(iv)),
+            Ok(iv) => Mpfi::from_bounds(p, (f(iv).inf(), f(iv).sup())),
             Err(_) => Mpfi::empty(p),
         }
     }
@@ -302,13 +303,13 @@ mod tests {
 
     #[test]
     fn square_of_a_sign_changing_interval_starts_at_zero() {
-        let x = Mpfi::from_interval(64, Interval::try_from((-2.0, 1.0)).unwrap());
+        let x = Mpfi::from_bounds(64, (-2.0, 1.0));
         assert_eq!(x.powi(2).bounds(), (0.0, 4.0));
     }
 
     #[test]
     fn division_by_an_interval_holding_zero_is_everything() {
-        let x = Mpfi::from_interval(64, Interval::try_from((-1.0, 1.0)).unwrap());
+        let x = Mpfi::from_bounds(64, (-1.0, 1.0));
         assert_eq!((Mpfi::point(64, 1.0) / x).bounds(), (f64::NEG_INFINITY, f64::INFINITY));
     }
 }

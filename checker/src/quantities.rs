@@ -1,7 +1,7 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
-use crate::broad_phase;
+use crate::broad_phase::Neighbourhood;
 use crate::model::{Cell, Model, Snapshot, TermInstance};
 use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Shape, Site};
@@ -49,8 +49,11 @@ impl<R: Real + Send + Sync> Lifted<R> {
     /// x_j − k·L with k chosen from the exact positions (`Cell::shift`) and the shift evaluated
     /// in `R`.
     fn seen_from(&self, i: usize, j: usize) -> Cow<'_, Site<R>> {
-        let d = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
-        let k = Cell::shift(&self.cell, d);
+        self.shifted(j, Cell::shift(&self.cell, std::array::from_fn(|a| self.x[j][a] - self.x[i][a])))
+    }
+
+    /// Site `j` moved by `k` box lengths (none: itself).
+    fn shifted(&self, j: usize, k: [f64; 3]) -> Cow<'_, Site<R>> {
         match &self.cell {
             Some(c) if k != [0.0; 3] => {
                 let mut s = self.sites[j].clone();
@@ -65,9 +68,10 @@ impl<R: Real + Send + Sync> Lifted<R> {
 
     /// `acc` + Σ `term(n, sites)` over the instances `which` picks (`None` adds nothing), in an order
     /// fixed by the model and the state alone: instances in order; pairs and bonds see each
-    /// other's nearest periodic image; a pair term's pairs, sorted, in chunks of `CHUNK`, the
-    /// first added to the running sum and each later one summed alone and then added, so the
-    /// chunks can be summed on `threads` threads and the bits do not depend on how many.
+    /// other's nearest periodic image; a pair term's pairs, sorted, in chunks: those of the first
+    /// `CHUNK` bodies added to the running sum, those of each later `CHUNK` bodies summed alone
+    /// and then added, so the chunks can be listed and summed on `threads` threads and the bits
+    /// do not depend on how many.
     fn sum<T: Clone + Send + Sync>(
         &self,
         model: &Model,
@@ -88,20 +92,17 @@ impl<R: Real + Send + Sync> Lifted<R> {
                 Shape::Pairwise => {
                     // Broad phase: a pair farther than the term's reach by a relative margin of
                     // 1e-6 (far more than any enclosure of r² is wide) contributes exactly zero.
-                    // The candidates come from a grid (`broad_phase`), in the double loop's order.
-                    let reach = t.kind.reach(&t.params);
-                    let beyond = reach.map_or(f64::INFINITY, |r| r * r * (1.0 + 1e-6));
-                    let within = |i: usize, j: usize| {
-                        let d = Cell::image(&self.cell, std::array::from_fn(|a| self.x[j][a] - self.x[i][a]));
-                        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= beyond
-                    };
-                    let pairs = broad_phase::candidates(&self.x, &self.cell, reach.map(|r| r * (1.0 + 1e-6)), within);
-                    let chunks: Vec<&[(usize, usize)]> = pairs.chunks(CHUNK).collect();
-                    let sums = in_order(chunks.len(), self.threads, |k| {
+                    // The pairs within it come from a grid (`broad_phase`), in the double loop's
+                    // order, each with its nearest image.
+                    let reach = t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6));
+                    let near = Neighbourhood::new(&self.x, &self.cell, reach);
+                    let bodies = self.x.len();
+                    let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
+                        let pairs = near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies));
                         fold(
                             start,
-                            &mut chunks[k].iter().map(|&(i, j)| term(n, &[&self.sites[i], &self.seen_from(i, j)])),
+                            &mut pairs.iter().map(|p| term(n, &[&self.sites[p.i], &self.shifted(p.j, p.shift)])),
                         )
                     });
                     acc = sums.into_iter().reduce(&add).unwrap_or(acc);
@@ -180,12 +181,12 @@ impl<R: Real + Send + Sync> Lifted<R> {
     }
 }
 
-/// Pairs summed alone before their sum joins the total (see `Lifted::sum`).
-const CHUNK: usize = 4096;
+/// Bodies whose pairs are summed alone before their sum joins the total (see `Lifted::sum`).
+const CHUNK: usize = 128;
 
 /// `f(k)` for k in 0..n, in order of k, computed on up to `threads` threads (thread w takes
 /// k ≡ w mod threads).
-fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+pub(crate) fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     let threads = threads.clamp(1, n.max(1));
     if threads == 1 {
         return (0..n).map(f).collect();
@@ -208,9 +209,10 @@ fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::enclosure::Enclosure;
     use crate::model::{Body, TermInstance, UnitSystem};
+    use crate::outward::Outward;
     use crate::terms::Kind;
-    use inari::Interval;
     use proptest::prelude::*;
     use rug::Float;
 
@@ -243,10 +245,10 @@ mod tests {
                                   k in 0.1f64..100.0, r0 in 0.0f64..3.0, gamma in 0.0f64..2.0, g in 0.0f64..20.0) {
             let m = model(k, r0, gamma, g);
             let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
-            let iv = Lifted::new(&m, &s, &Interval::EMPTY);
+            let iv = Lifted::new(&m, &s, &Outward::NAN);
             let hp = Lifted::new(&m, &s, &Float::new(256));
-            let inside = |i: Interval, f: Float| {
-                let (lo, hi) = (Float::with_val(256, i.inf()), Float::with_val(256, i.sup()));
+            let inside = |i: Outward, f: Float| {
+                let (lo, hi) = (Float::with_val(256, i.bounds().0), Float::with_val(256, i.bounds().1));
                 lo <= f && f <= hi
             };
             prop_assert!(inside(iv.energy(&m), hp.energy(&m)));
@@ -255,7 +257,8 @@ mod tests {
             for (a, b) in iv.angular_momentum(&m).into_iter().zip(hp.angular_momentum(&m)) { prop_assert!(inside(a, b)); }
             // and the enclosure is tight: a few ulps of the energy's scale
             let e = iv.energy(&m);
-            prop_assert!(e.wid() <= 1e-12 * e.mag().max(1.0));
+            let (lo, hi) = e.bounds();
+            prop_assert!(hi - lo <= 1e-12 * hi.abs().max(lo.abs()).max(1.0));
         }
     }
 
@@ -288,15 +291,17 @@ mod tests {
     fn pair_sums_are_the_same_bits_on_any_thread_count() {
         let (m, x, v) = liquid();
         let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
-        let on = |n| Lifted::new(&m, &s, &Interval::EMPTY).on_threads(n).energy(&m);
+        let on = |n| Lifted::new(&m, &s, &Outward::NAN).on_threads(n).energy(&m);
         let one = on(1);
-        assert!(Lifted::new(&m, &s, &0.0).sum(&m, |_| true, (0, 0, |a, b| a + b), |_, _| Some(1)) > 4 * CHUNK);
+        assert!(x.len() > 4 * CHUNK, "several chunks");
         for n in [2, 3] {
-            assert_eq!((on(n).inf().to_bits(), on(n).sup().to_bits()), (one.inf().to_bits(), one.sup().to_bits()));
+            let bits = |(lo, hi): (f64, f64)| (lo.to_bits(), hi.to_bits());
+            assert_eq!(bits(on(n).bounds()), bits(one.bounds()));
         }
         let exact = Lifted::new(&m, &s, &Float::new(256)).on_threads(2).energy(&m);
-        assert!(Float::with_val(256, one.inf()) <= exact && exact <= Float::with_val(256, one.sup()), "{one:?}");
-        assert!(one.wid() <= 1e-11 * one.mag(), "{one:?}");
+        let (lo, hi) = one.bounds();
+        assert!(Float::with_val(256, lo) <= exact && exact <= Float::with_val(256, hi), "{one:?}");
+        assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
     }
 
     #[test]

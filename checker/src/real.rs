@@ -1,12 +1,12 @@
 //! The scalar every term definition is written over.
 //!
 //! A definition is written once, generic over [`Real`], and instantiated as `f64` (reference
-//! value), [`Interval`] (the checker's rigorous enclosure), [`rug::Float`] (high-precision
-//! reference) and [`Dimension`](crate::units::Dimension) (its dimensional type). The trait holds
-//! only what the definitions use; each operation must be exact for `f64`-like instances up to
-//! their own rounding and *sound* (an enclosure) for `Interval`.
+//! value), [`Outward`](crate::outward::Outward) (the checker's rigorous binary64 enclosure),
+//! [`Mpfi`](crate::mpfi::Mpfi) (its MPFR enclosure), [`rug::Float`] (high-precision reference)
+//! and [`Dimension`](crate::units::Dimension) (its dimensional type). The trait holds only what
+//! the definitions use; each operation must be exact for `f64`-like instances up to their own
+//! rounding and *sound* (an enclosure) for the enclosures.
 
-use inari::Interval;
 #[cfg(test)]
 use rug::Float;
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -75,57 +75,6 @@ impl Real for f64 {
     }
 }
 
-impl Real for Interval {
-    same_named!(Interval: sqrt, exp, ln, acos, cos, sin);
-    /// By squaring (`sqr`, tight across zero) and multiplying, each step outward-rounded, so the
-    /// result encloses xⁿ; inari's own `powi` is tighter only across zero for odd n, and goes
-    /// through MPFR, many times slower on the LJ terms' sixth and twelfth powers. The first
-    /// factor is taken as it is, not multiplied into [1, 1] (exact either way, but every
-    /// interval operation costs two rounding-mode switches).
-    fn powi(self, n: i32) -> Self {
-        let mut out: Option<Interval> = None;
-        let mut base = self;
-        let mut k = n.unsigned_abs();
-        while k > 0 {
-            if k & 1 == 1 {
-                out = Some(out.map_or(base, |o| o * base));
-            }
-            k >>= 1;
-            if k > 0 {
-                base = base.sqr();
-            }
-        }
-        let out = out.unwrap_or(point(1.0));
-        if n < 0 {
-            out.recip()
-        } else {
-            out
-        }
-    }
-    fn lift(&self, c: f64) -> Self {
-        point(c)
-    }
-    fn lt(&self, bound: &Self) -> Option<bool> {
-        if self.is_empty() || bound.is_empty() {
-            None
-        } else if self.sup() < bound.inf() {
-            Some(true)
-        } else if self.inf() >= bound.sup() {
-            Some(false)
-        } else {
-            None
-        }
-    }
-    fn hull(self, o: Self) -> Self {
-        self.convex_hull(o)
-    }
-}
-
-/// The degenerate interval `[c, c]`; `c` must be finite (the model and states are checked first).
-pub fn point(c: f64) -> Interval {
-    Interval::try_from((c, c)).unwrap_or(Interval::ENTIRE)
-}
-
 /// The 1024-bit reference of the soundness tests (round-to-nearest: a value, not an enclosure;
 /// the checker's own high precision is `mpfi::Mpfi`, which rounds outward).
 #[cfg(test)]
@@ -191,38 +140,11 @@ pub fn norm2<R: Real>(a: &Vec3<R>) -> R {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proptest::prelude::*;
-
-    proptest! {
-        /// xⁿ for every x of the interval lies in its `powi` (1024 bits hold any 53-bit number's
-        /// twelfth power exactly).
-        #[test]
-        fn interval_powers_enclose_the_exact_powers(a in -3.0f64..3.0, w in 0.0f64..1.0, u in 0.0f64..=1.0, n in -6i32..=12) {
-            let x = Interval::try_from((a, a + w)).unwrap();
-            let t = a + u * w;
-            prop_assume!(t != 0.0 || n >= 0);
-            let exact = rug::ops::Pow::pow(Float::with_val(1024, t), n);
-            let p = x.powi(n);
-            prop_assert!(Float::with_val(1024, p.inf()) <= exact && exact <= Float::with_val(1024, p.sup()), "{x:?}^{n} = {p:?}");
-        }
-    }
-
-    #[test]
-    fn interval_square_is_tighter_than_product() {
-        let x = Interval::try_from((-1.0, 2.0)).unwrap();
-        assert_eq!(x.powi(2).inf(), 0.0);
-        assert_eq!((x * x).inf(), -2.0);
-    }
 
     #[test]
     fn lift_keeps_precision() {
         let x = Float::with_val(300, 1.5);
         assert_eq!(x.lift(0.1).prec(), 300);
         assert_eq!(x.lift(0.1).to_f64(), 0.1);
-    }
-
-    #[test]
-    fn point_of_nonfinite_is_entire() {
-        assert!(point(f64::NAN).is_entire());
     }
 }

@@ -23,3 +23,8 @@ fn classify_is_sound_for_every_binary64() {
 fn state_file_lengths_give_back_their_count() {
     prove("lengths.smt2", 1);
 }
+
+#[test]
+fn outward_rounding_encloses_every_binary64_result() {
+    prove("outward.smt2", 8);
+}

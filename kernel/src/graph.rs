@@ -75,11 +75,20 @@ impl LagrangianGraph {
 
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        self.evaluate(s, f, true)
+    }
+
+    /// Writes the generalized forces into `f`, and nothing else: for the steps no one sees.
+    pub fn forces_only(&self, s: &State, f: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        self.evaluate(s, f, false).map(|_| ())
+    }
+
+    fn evaluate(&self, s: &State, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
         let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges, c: &self.colours };
         let mut potential = Sum::default();
         for (_, g) in &self.groups {
-            potential.add(g.accumulate(&frame, f)?);
+            potential.add(g.accumulate(&frame, f, energy)?);
         }
         Ok(potential.value())
     }

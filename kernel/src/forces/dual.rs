@@ -122,7 +122,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
 
     let mut fast = vec![[0.0; 3]; n];
     let energy = group(kind, &[&term], &model, &None)
-        .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &colour }, &mut fast)
+        .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &colour }, &mut fast, true)
         .expect("no singularity");
 
     // The definition at a state where coordinate (b, c) of x (or v) carries the derivative.

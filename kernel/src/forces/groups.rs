@@ -77,7 +77,8 @@ impl<T: Bonded<N> + Send + Sync + 'static, const N: usize> Bonds<T, N> {
 }
 
 impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+    /// (The energy of a few bonds costs next to nothing: it is always summed.)
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], _energy: bool) -> Result<f64, Singularity> {
         let mut energy = Sum::default();
         for (k, b) in self.sites.iter().enumerate() {
             // positions relative to the first body, by minimum image in a periodic cell
@@ -160,7 +161,13 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     /// The pairs of the positions `blocks` of the list: forces into `f`, by position, the energy
     /// returned. Rows are the outer loop so that each one's constants stay in registers through
     /// the pair loop.
-    fn listed(&self, l: &Neighbours, s: &Frame, blocks: Range<usize>, f: &mut [[f64; 3]]) -> Result<Sum, Singularity> {
+    fn listed<const ENERGY: bool>(
+        &self,
+        l: &Neighbours,
+        s: &Frame,
+        blocks: Range<usize>,
+        f: &mut [[f64; 3]],
+    ) -> Result<Sum, Singularity> {
         let x = &l.wrapped;
         let body = |b: usize| l.bodies[b] as usize;
         let mut energy = Sum::default();
@@ -188,7 +195,9 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                         fi[c] += a[c];
                         f[j][c] -= a[c];
                     }
-                    ei += e;
+                    if ENERGY {
+                        ei += e;
+                    }
                 }
                 for c in 0..3 {
                     f[i][c] += fi[c];
@@ -202,7 +211,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     /// Through the Verlet list, split by positions into chunks of about equal pair counts, each
     /// summing into its own buffer (by position); the buffers are added in order and then given
     /// back to the bodies.
-    fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+    fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         let n = s.x.len();
         let chunks = if n >= SPLIT_FROM { CHUNKS } else { 1 };
         let total = l.count();
@@ -210,7 +219,10 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
             .collect();
         let mut buffers = vec![vec![[0.0; 3]; n]; chunks];
-        let work = |(c, t): (usize, &mut Vec<[f64; 3]>)| self.listed(l, s, bounds[c]..bounds[c + 1], t);
+        let work = |(c, t): (usize, &mut Vec<[f64; 3]>)| match energy {
+            true => self.listed::<true>(l, s, bounds[c]..bounds[c + 1], t),
+            false => self.listed::<false>(l, s, bounds[c]..bounds[c + 1], t),
+        };
         let sums: Vec<Result<Sum, Singularity>> = match &self.pool {
             Some(pool) if chunks > 1 => pool.install(|| buffers.par_iter_mut().enumerate().map(work).collect()),
             _ => buffers.iter_mut().enumerate().map(work).collect(),
@@ -281,11 +293,12 @@ fn colour<T: Paired>(s: &Frame, i: usize, j: usize) -> f64 {
 }
 
 impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+    /// Through a Verlet list, the energy only if asked (it is a fifth of a pair's arithmetic).
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         let Some(list) = &self.list else { return self.traversed(s, f) };
         let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         l.update(s.x, &self.cell, self.pool.as_deref());
-        let energy = self.through_list(&l, s, f)?;
+        let energy = self.through_list(&l, s, f, energy)?;
         if energy.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
             return Ok(energy);
         }
@@ -336,7 +349,8 @@ impl<T: Field + Send + Sync + 'static> Fields<T> {
 }
 
 impl<T: Field + Send + Sync> Force for Fields<T> {
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+    /// (One term per body: the energy is always summed.)
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], _energy: bool) -> Result<f64, Singularity> {
         let mut energy = Sum::default();
         for (p, on) in self.rows.iter().zip(&self.on) {
             let mut one = |i: usize| -> Result<(), Singularity> {

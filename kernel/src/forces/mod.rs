@@ -63,8 +63,9 @@ pub struct Frame<'a> {
 
 /// A homogeneous group of term instances.
 pub trait Force: Send + Sync {
-    /// Adds the group's generalized forces to `f` and returns its potential energy.
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity>;
+    /// Adds the group's generalized forces to `f` and returns its potential energy, if
+    /// `energy` (0 if not: a step no one looks at needs only the forces).
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity>;
     /// Whether the force depends on velocities (the solver then iterates its closing kick).
     fn velocity_dependent(&self) -> bool;
     /// How the group visits its bodies, in a line (`lagra run --explain`).
@@ -196,7 +197,7 @@ mod tests {
                 let v = vec![[0.2, -0.1, 0.05]; n];
                 let (m, q, c) = (vec![1.0; n], vec![1.0; n], vec![[0.5, 0.3]; n]);
                 let mut f = vec![[0.0; 3]; n];
-                match g.accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &c }, &mut f) {
+                match g.accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &c }, &mut f, true) {
                     Ok(e) => assert!(
                         e.is_finite() && f.iter().flatten().all(|c| c.is_finite()),
                         "{kind:?} at r = {r}: {e} {f:?}"

@@ -49,12 +49,14 @@ impl Stepper {
         self.advance_to(g, s, dt, s.step + 1)
     }
 
-    /// Steps until the state is at step `until`, or stops after the first step that leaves the
-    /// potential energy non-finite (where the run must stop). The steps in between are seen by
-    /// no one, so nothing else runs between them; the integrator is chosen once, not per step.
+    /// Steps until the state is at step `until`; the steps in between are seen by no one, so
+    /// nothing else runs between them, and the integrator is chosen once, not per step. A
+    /// non-finite force is an error at the step it arises; the potential energy is that of the
+    /// state reached (velocity Verlet with conservative forces computes it at that step only;
+    /// the others stop after the first step that leaves it non-finite, where the run must stop).
     pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Singularity> {
         match self.integrator {
-            Integrator::VelocityVerlet => self.repeat(g, s, dt, until, VelocityVerlet::advance),
+            Integrator::VelocityVerlet => self.vv.advance_to(g, s, dt, until),
             Integrator::Yoshida4 => self.repeat(g, s, dt, until, yoshida::advance),
             Integrator::Rk4 => self.repeat(g, s, dt, until, |vv, g, s, dt| {
                 vv.potential = rk4::advance(g, s, dt, &mut vv.f)?;
@@ -69,8 +71,7 @@ impl Stepper {
     {
         while s.step < until {
             one(&mut self.vv, g, s, dt)?;
-            s.step += 1;
-            s.t = s.step as f64 * dt;
+            tick(s, dt);
             if !self.vv.potential.is_finite() {
                 break;
             }
@@ -87,6 +88,12 @@ impl Stepper {
     pub fn potential(&self) -> f64 {
         self.vv.potential
     }
+}
+
+/// The step counter and the clock after one step (t = step·dt, never accumulated).
+fn tick(s: &mut State, dt: f64) {
+    s.step += 1;
+    s.t = s.step as f64 * dt;
 }
 
 #[cfg(test)]

@@ -1,0 +1,403 @@
+//! The checker's fast enclosure: binary64 intervals whose every endpoint is computed in the
+//! default rounding (to nearest) and then stepped one ulp outward.
+//!
+//! Why it is sound: IEEE 754 rounds + − × ÷ √ correctly, so the computed r = RN(x) is a
+//! binary64 value nearest the exact x. Then pred(r) ≤ x ≤ succ(r): were x above succ(r), succ(r)
+//! would be nearer to x than r (and symmetrically below); at the ends of the range succ(MAX) =
+//! +∞ and pred(+∞) = MAX, which an overflowing x ≥ MAX + ulp/2 still lies above. So each lower
+//! endpoint is `pred` of a rounded bound and each upper one `succ`, and every exact value of
+//! the operation on the enclosed reals lies in between. Rust evaluates these operations in the
+//! default rounding mode and never contracts them into fused operations. z3 proves the step for
+//! + − × ÷ over every binary64 operand in its IEEE model (`checker/proofs/outward.smt2`); the
+//! tests below hold every operation to MPFR over random and extreme operands.
+//!
+//! Why not inari for this: inari rounds each operation outward by switching the CPU's rounding
+//! mode around it, twice per operation, which made a 32,000-atom checkpoint several times
+//! slower. The price here is one ulp more width per operation. The functions beyond √ (exp, ln,
+//! the trigonometric ones) are not correctly rounded in binary64 libraries, so they go through
+//! inari. An enclosure nothing is known of (a NaN anywhere, √ of a negative interval) is
+//! `NAN`: every bound it reports is NaN, which the decision never takes for a PASS.
+
+use crate::enclosure::Enclosure;
+use crate::real::Real;
+use inari::Interval;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// The reals in `[lo, hi]`; both NaN when nothing is known.
+#[derive(Clone, Copy, Debug)]
+pub struct Outward {
+    lo: f64,
+    hi: f64,
+}
+
+impl Outward {
+    pub const NAN: Outward = Outward { lo: f64::NAN, hi: f64::NAN };
+    const ENTIRE: Outward = Outward { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
+
+    /// `[c, c]`, exact (a NaN or an infinity gives `NAN`).
+    pub fn point(c: f64) -> Outward {
+        Outward::from_bounds(c, c)
+    }
+
+    /// The reals from `lo` to `hi`, bounds already known to enclose (rounded outward or exact):
+    /// `NAN` unless lo ≤ hi, lo below +∞ and hi above −∞.
+    pub fn from_bounds(lo: f64, hi: f64) -> Outward {
+        if lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY {
+            Outward { lo, hi }
+        } else {
+            Outward::NAN
+        }
+    }
+
+    /// `[pred(lo), succ(hi)]`: the bounds of a correctly rounded result, stepped outward. The
+    /// callers round monotone results of ordered operands, so lo ≤ hi unless a NaN came in;
+    /// pred never gives +∞ nor succ −∞.
+    #[inline]
+    fn rounded(lo: f64, hi: f64) -> Outward {
+        Outward { lo: lo.next_down(), hi: hi.next_up() }
+    }
+
+    fn is_nan(&self) -> bool {
+        self.lo.is_nan() || self.hi.is_nan()
+    }
+
+    /// Through inari, for the functions binary64 libraries do not round correctly.
+    fn via_inari(self, f: impl Fn(Interval) -> Interval) -> Outward {
+        match Interval::try_from((self.lo, self.hi)).map(f) {
+            Ok(r) => Outward::from_bounds(r.inf(), r.sup()), // empty: inf > sup, so NAN
+            Err(_) => Outward::NAN,
+        }
+    }
+
+    /// x², tight across zero (x² ≥ 0 is known, x·x would not know it).
+    #[inline]
+    fn sqr(self) -> Outward {
+        let (a, b) = (self.lo * self.lo, self.hi * self.hi);
+        let (lo, hi) = if self.lo >= 0.0 {
+            (a, b)
+        } else if self.hi <= 0.0 {
+            (b, a)
+        } else {
+            (0.0, a.max(b))
+        };
+        let r = Outward::rounded(lo, hi);
+        // x² ≥ 0 (and a NaN stays NaN: `max` would drop it)
+        Outward { lo: if r.lo < 0.0 { 0.0 } else { r.lo }, ..r }
+    }
+
+    /// xᵏ: squares tight across zero, the squares and cubes the definitions use written out.
+    #[inline]
+    fn power(self, k: u32) -> Outward {
+        match k {
+            0 => Outward::point(1.0),
+            1 => self,
+            2 => self.sqr(),
+            3 => self.sqr() * self,
+            k if k % 2 == 0 => self.power(k / 2).sqr(),
+            k => self.power(k - 1) * self,
+        }
+    }
+
+    /// The hull of four endpoint results, rounded outward. A NaN among them without a NaN
+    /// operand is 0·∞ or ∞/∞ (or ∞ − ∞): the whole line, which is sound.
+    fn of_four(p: [f64; 4], operands_nan: bool) -> Outward {
+        if p.iter().any(|c| c.is_nan()) {
+            return if operands_nan { Outward::NAN } else { Outward::ENTIRE };
+        }
+        Outward::rounded(p[0].min(p[1]).min(p[2].min(p[3])), p[0].max(p[1]).max(p[2].max(p[3])))
+    }
+}
+
+impl Add for Outward {
+    type Output = Outward;
+    #[inline]
+    fn add(self, o: Outward) -> Outward {
+        Outward::rounded(self.lo + o.lo, self.hi + o.hi)
+    }
+}
+
+impl Sub for Outward {
+    type Output = Outward;
+    #[inline]
+    fn sub(self, o: Outward) -> Outward {
+        Outward::rounded(self.lo - o.hi, self.hi - o.lo)
+    }
+}
+
+impl Neg for Outward {
+    type Output = Outward;
+    #[inline]
+    fn neg(self) -> Outward {
+        Outward { lo: -self.hi, hi: -self.lo }
+    }
+}
+
+impl Mul for Outward {
+    type Output = Outward;
+    #[inline]
+    fn mul(self, o: Outward) -> Outward {
+        if self.lo >= 0.0 && o.lo >= 0.0 {
+            // both non-negative (NaN fails the test), the common case in the definitions:
+            // the corners are ordered, unless 0·∞ (then the general case below)
+            let (lo, hi) = (self.lo * o.lo, self.hi * o.hi);
+            if !hi.is_nan() {
+                return Outward::rounded(lo, hi);
+            }
+        }
+        let (a, b) = (self, o);
+        Outward::of_four([a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi], a.is_nan() || b.is_nan())
+    }
+}
+
+impl Div for Outward {
+    type Output = Outward;
+    #[inline]
+    fn div(self, o: Outward) -> Outward {
+        if self.is_nan() || o.is_nan() {
+            return Outward::NAN;
+        }
+        if o.lo <= 0.0 && o.hi >= 0.0 {
+            // a divisor that may be zero: nothing is known of the quotient's size
+            return Outward::ENTIRE;
+        }
+        let (a, b) = (self, o);
+        if a.lo >= 0.0 && b.lo > 0.0 && b.lo < f64::INFINITY {
+            // the common case: the corners are ordered (∞/∞ cannot arise)
+            return Outward::rounded(a.lo / b.hi, a.hi / b.lo);
+        }
+        Outward::of_four([a.lo / b.lo, a.lo / b.hi, a.hi / b.lo, a.hi / b.hi], false)
+    }
+}
+
+impl Real for Outward {
+    #[inline]
+    fn lift(&self, c: f64) -> Self {
+        Outward::point(c)
+    }
+    /// √ of the non-negative part; `NAN` if there is none.
+    fn sqrt(self) -> Self {
+        if !(self.hi >= 0.0) {
+            return Outward::NAN;
+        }
+        let lo = if self.lo > 0.0 { self.lo.sqrt().next_down().max(0.0) } else { 0.0 };
+        Outward { lo, hi: self.hi.sqrt().next_up() }
+    }
+    /// By squaring and multiplying, each step rounded outward.
+    #[inline]
+    fn powi(self, n: i32) -> Self {
+        let p = self.power(n.unsigned_abs());
+        if n < 0 {
+            Outward::point(1.0) / p
+        } else {
+            p
+        }
+    }
+    fn exp(self) -> Self {
+        self.via_inari(Interval::exp)
+    }
+    fn ln(self) -> Self {
+        self.via_inari(Interval::ln)
+    }
+    fn acos(self) -> Self {
+        self.via_inari(Interval::acos)
+    }
+    fn cos(self) -> Self {
+        self.via_inari(Interval::cos)
+    }
+    fn sin(self) -> Self {
+        self.via_inari(Interval::sin)
+    }
+    fn atan2(self, x: Self) -> Self {
+        match Interval::try_from((x.lo, x.hi)) {
+            Ok(x) => self.via_inari(|y| y.atan2(x)),
+            Err(_) => Outward::NAN,
+        }
+    }
+    #[inline]
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        if self.hi < bound.lo {
+            Some(true)
+        } else if self.lo >= bound.hi {
+            Some(false)
+        } else {
+            None // straddling, or a NaN
+        }
+    }
+    fn hull(self, o: Self) -> Self {
+        if self.is_nan() || o.is_nan() {
+            return Outward::NAN;
+        }
+        Outward { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
+    }
+}
+
+impl Enclosure for Outward {
+    fn abs(self) -> Self {
+        if self.lo >= 0.0 || self.is_nan() {
+            self
+        } else if self.hi <= 0.0 {
+            -self
+        } else {
+            Outward { lo: 0.0, hi: self.hi.max(-self.lo) }
+        }
+    }
+    fn max(self, o: Self) -> Self {
+        if self.is_nan() || o.is_nan() {
+            return Outward::NAN;
+        }
+        Outward { lo: self.lo.max(o.lo), hi: self.hi.max(o.hi) }
+    }
+    fn bounds(&self) -> (f64, f64) {
+        (self.lo, self.hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use rug::float::Round;
+    use rug::Float;
+
+    /// Exact for sums, differences and products of binary64 values (2,200 bits span every
+    /// exponent); quotients and roots are enclosed by rounding down and up at the same width.
+    const WIDE: u32 = 2200;
+
+    fn exact(x: f64) -> Float {
+        Float::with_val(WIDE, x)
+    }
+
+    /// [lo, hi] holds every value between `down` and `up` (the exact result rounded both ways).
+    fn holds(r: Outward, down: &Float, up: &Float) -> bool {
+        !r.is_nan() && Float::with_val(WIDE, r.lo) <= *down && *up <= Float::with_val(WIDE, r.hi)
+    }
+
+    /// The four endpoint combinations of a binary operation, exact or rounded both ways.
+    fn corners(a: Outward, b: Outward, op: impl Fn(&Float, &Float, Round) -> Float) -> (Float, Float) {
+        let mut lo = Float::with_val(WIDE, f64::INFINITY);
+        let mut hi = Float::with_val(WIDE, f64::NEG_INFINITY);
+        for x in [a.lo, a.hi] {
+            for y in [b.lo, b.hi] {
+                lo = lo.min(&op(&exact(x), &exact(y), Round::Down));
+                hi = hi.max(&op(&exact(x), &exact(y), Round::Up));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// A binary64 value: any bits (every exponent, subnormals, infinities), or a moderate one.
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![any::<u64>().prop_map(f64::from_bits).prop_filter("not NaN", |x| !x.is_nan()), -1e3f64..1e3]
+    }
+
+    fn interval() -> impl Strategy<Value = Outward> {
+        (value(), value()).prop_map(|(a, b)| Outward::from_bounds(a.min(b), a.max(b)))
+    }
+
+    fn arith(op: char) -> impl Fn(&Float, &Float, Round) -> Float {
+        move |x, y, r| {
+            let mut out = Float::new(WIDE);
+            let _ = match op {
+                '+' => out.assign_round(x + y, r),
+                '-' => out.assign_round(x - y, r),
+                '*' => out.assign_round(x * y, r),
+                _ => out.assign_round(x / y, r),
+            };
+            out
+        }
+    }
+
+    use rug::ops::AssignRound;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+        /// Every operation's result holds the exact results at its operands' endpoints (for +, −,
+        /// × and ÷ on intervals the extremes are at the endpoints), over all binary64 values:
+        /// subnormals, overflow and the infinities included.
+        #[test]
+        fn arithmetic_encloses_the_exact_result(a in interval(), b in interval()) {
+            let finite = |r: &Outward| r.lo.is_finite() && r.hi.is_finite();
+            prop_assume!(finite(&a) && finite(&b));
+            for (op, r) in [('+', a + b), ('-', a - b), ('*', a * b)] {
+                let (lo, hi) = corners(a, b, arith(op));
+                prop_assert!(holds(r, &lo, &hi), "{a:?} {op} {b:?} = {r:?}");
+            }
+            if !(b.lo <= 0.0 && b.hi >= 0.0) {
+                let (lo, hi) = corners(a, b, arith('/'));
+                prop_assert!(holds(a / b, &lo, &hi), "{a:?} / {b:?} = {:?}", a / b);
+            }
+        }
+
+        /// √, squares and powers enclose the exact values at the endpoints (both monotone on
+        /// the non-negative reals, where these intervals live).
+        #[test]
+        fn roots_and_powers_enclose(a in interval(), n in -7i32..=12) {
+            let a = Outward::from_bounds(a.lo.abs().min(a.hi.abs()), a.lo.abs().max(a.hi.abs()));
+            prop_assume!(a.hi.is_finite() && (n >= 0 || a.lo > 0.0));
+            let root = |x: f64, r| Float::with_val_round(WIDE, exact(x).sqrt_ref(), r).0;
+            prop_assert!(holds(a.sqrt(), &root(a.lo, Round::Down), &root(a.hi, Round::Up)));
+            let pow = |x: f64, r| Float::with_val_round(WIDE, rug::ops::Pow::pow(&exact(x), n), r).0;
+            let (lo, hi) = if n >= 0 { (a.lo, a.hi) } else { (a.hi, a.lo) };
+            prop_assert!(holds(a.powi(n), &pow(lo, Round::Down), &pow(hi, Round::Up)), "{a:?}^{n} = {:?}", a.powi(n));
+        }
+
+        /// A square across zero starts at zero, and is never below it.
+        #[test]
+        fn squares_are_non_negative(a in interval()) {
+            let s = a.powi(2);
+            prop_assert!(s.lo >= 0.0);
+            if a.lo <= 0.0 && a.hi >= 0.0 { prop_assert_eq!(s.lo, 0.0); }
+        }
+    }
+
+    #[test]
+    fn overflow_and_underflow_stay_enclosed() {
+        let max = Outward::point(f64::MAX);
+        assert_eq!((max + max).bounds(), (f64::MAX, f64::INFINITY));
+        let tiny = Outward::point(f64::from_bits(1));
+        let t2 = tiny * tiny;
+        assert!(t2.lo < 0.0 && t2.hi > 0.0, "{t2:?}");
+    }
+
+    #[test]
+    fn nothing_known_is_never_a_bound() {
+        for r in [
+            Outward::NAN + Outward::point(1.0),
+            Outward::point(-1.0).sqrt(),
+            Outward::NAN * Outward::point(0.0),
+            Outward::point(1.0) / Outward::NAN,
+            Outward::point(f64::NAN),
+            Outward::NAN.abs().max(Outward::point(2.0)),
+            Outward::point(2.0).hull(Outward::NAN),
+        ] {
+            let (lo, hi) = r.bounds();
+            assert!(lo.is_nan() && hi.is_nan(), "{r:?}");
+        }
+        assert_eq!(Outward::NAN.lt(&Outward::point(1.0)), None);
+    }
+
+    #[test]
+    fn zero_times_infinity_and_zero_divisors_are_the_whole_line() {
+        let z = Outward::point(0.0);
+        let up = Outward::from_bounds(1.0, f64::INFINITY);
+        assert_eq!((Outward::point(-1.0) * up * z).bounds(), (f64::NEG_INFINITY, f64::INFINITY));
+        assert_eq!(
+            (Outward::point(1.0) / Outward::from_bounds(-1.0, 1.0)).bounds(),
+            (f64::NEG_INFINITY, f64::INFINITY)
+        );
+    }
+
+    #[test]
+    fn transcendental_functions_enclose_their_values() {
+        let x = Outward::from_bounds(0.5, 0.75);
+        let e = x.exp();
+        assert!(e.lo <= 0.5f64.exp() && 0.75f64.exp() <= e.hi && e.hi - e.lo < 0.5);
+        assert!(Outward::point(-1.0).ln().is_nan());
+    }
+
+    #[test]
+    fn the_width_is_a_few_ulps() {
+        let third = Outward::point(1.0) / Outward::point(3.0);
+        assert_eq!(third.hi.to_bits() - third.lo.to_bits(), 2);
+    }
+}
