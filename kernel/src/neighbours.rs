@@ -143,6 +143,7 @@ impl Neighbours {
         self.offset.extend(self.bodies.iter().map(|&i| offset[i as usize]));
         self.wrapped.clear();
         self.wrapped.extend(self.bodies.iter().map(|&i| wrapped[i as usize]));
+        let reach = self.reach;
         let Neighbours { start, pairs, shifts, wrapped: w, .. } = self;
         start.clear();
         match &binned {
@@ -157,7 +158,7 @@ impl Neighbours {
                                 .into_par_iter()
                                 .map(|cells| {
                                     let (mut s, mut l) = (vec![], vec![]);
-                                    listed_in(b, cells, w, shifts, r, &mut s, &mut l);
+                                    listed_in(b, cells, w, shifts, (reach, r), &mut s, &mut l);
                                     (s, l)
                                 })
                                 .collect()
@@ -169,7 +170,7 @@ impl Neighbours {
                         }
                     }
                     // into the list itself, whose storage is kept from build to build
-                    _ => listed_in(b, 0..b.cells(), w, shifts, r, start, pairs),
+                    _ => listed_in(b, 0..b.cells(), w, shifts, (reach, r), start, pairs),
                 }
             }
             // every pair, in body order
@@ -195,36 +196,51 @@ impl Neighbours {
     }
 }
 
-/// Appends the pairs within `r` of the positions in `cells`, and where each position's start in
-/// `pairs`. Every candidate is written, and kept by advancing the end only if it is within
-/// reach: no branch to mispredict on the ~1 in 4 candidates that are.
+/// Appends the pairs within `reach` + skin (`r`) of the positions in `cells`, and where each
+/// position's start in `pairs`: first those within `reach` at the build, then those in the skin,
+/// so that the pair loop's cutoff test is nearly always the same as for the pair before (the
+/// bodies move little between builds), not a coin toss. Every candidate is written to both
+/// places, and kept by advancing the end of one of them: no branch to mispredict either.
+#[allow(clippy::too_many_arguments)]
 fn listed_in(
     b: &Binned,
     cells: Range<usize>,
     w: &[[f64; 3]],
     shifts: &[[f64; 3]; 32],
-    r: f64,
+    (reach, r): (f64, f64),
     start: &mut Vec<usize>,
     pairs: &mut Vec<Pair>,
 ) {
     let mut end = pairs.len();
-    let r2 = r * r;
+    let (inner, r2) = (reach * reach, r * r);
+    let mut shell: Vec<Pair> = vec![];
     b.each_in(cells, |i, runs| {
         start.push(end);
         let xi = w[i];
+        let mut outer = 0;
         for (run, k) in runs {
             if pairs.len() < end + run.len() {
                 pairs.resize((2 * pairs.len()).max(end + run.len() + 1024), Pair(0));
+            }
+            if shell.len() < outer + run.len() {
+                shell.resize(outer + run.len() + 256, Pair(0));
             }
             let s = &shifts[*k as usize];
             let (o0, o1, o2) = (s[0] - xi[0], s[1] - xi[1], s[2] - xi[2]);
             for j in run.clone() {
                 let p = &w[j];
                 let (d0, d1, d2) = (p[0] + o0, p[1] + o1, p[2] + o2);
-                pairs[end] = Pair::new(j, *k);
-                end += usize::from(d0 * d0 + d1 * d1 + d2 * d2 < r2);
+                let d2 = d0 * d0 + d1 * d1 + d2 * d2;
+                (pairs[end], shell[outer]) = (Pair::new(j, *k), Pair::new(j, *k));
+                end += usize::from(d2 < inner);
+                outer += usize::from(inner <= d2 && d2 < r2);
             }
         }
+        if pairs.len() < end + outer {
+            pairs.resize(end + outer + 1024, Pair(0));
+        }
+        pairs[end..end + outer].copy_from_slice(&shell[..outer]);
+        end += outer;
     });
     pairs.truncate(end);
 }
@@ -310,6 +326,28 @@ mod tests {
         let one = built(1);
         assert!(one.2.len() > 50_000, "{}", one.2.len());
         assert!(built(2) == one && built(3) == one);
+    }
+
+    /// At a build each body's pairs within reach come first, then those in the skin.
+    #[test]
+    fn pairs_within_reach_come_before_the_skin() {
+        let mut rng = Rng::new(5);
+        let cell = Some(Cell { size: [16.0; 3], periodic: [true; 3] });
+        let x: Vec<[f64; 3]> = (0..3000).map(|_| std::array::from_fn(|_| rng.uniform(-4.0, 20.0))).collect();
+        let mut list = Neighbours::new(&cell, 2.5).unwrap();
+        list.update(&x, &cell, None);
+        let (w, mut shell) = (&list.wrapped, 0);
+        for b in 0..x.len() {
+            let inside: Vec<bool> = (list.start[b]..list.start[b + 1])
+                .map(|k| {
+                    let (jb, s) = (list.pairs[k].j(), list.shifts[list.pairs[k].image()]);
+                    (0..3).map(|a| (w[jb][a] - w[b][a] + s[a]).powi(2)).sum::<f64>() < 2.5 * 2.5
+                })
+                .collect();
+            assert!(inside.windows(2).all(|p| p[0] >= p[1]), "body {b}: {inside:?}");
+            shell += inside.iter().filter(|&&i| !i).count();
+        }
+        assert!(shell > list.count() / 5, "{shell} of {} in the skin", list.count());
     }
 
     /// Two bodies that together moved just over the skin (three quarters and a third of it)
