@@ -1,11 +1,14 @@
-; Why `Outward` (checker/src/outward.rs) encloses: for each operation it rounds, the exact result
-; x lies between pred(RN(x)) and succ(RN(x)). In z3's model of IEEE binary64: for every a, b,
-; no binary64 value f lies strictly between the result rounded to nearest and the result rounded
-; up (or down). The result rounded up is ≥ x and the result rounded down ≤ x, so with nothing in
-; between, succ(RN(x)) ≥ RU(x) ≥ x and pred(RN(x)) ≤ RD(x) ≤ x: `next_up` / `next_down` of the
-; rounded endpoints bound the exact one, overflow to ±∞ included. Run: z3 checker/proofs/outward.smt2
-; (expect eight `unsat`; about 15 s). √ is the one operation left to the tests: z3 did not
-; settle it within ten minutes here (its enclosure is tested against MPFR, rounded both ways).
+; Why `Outward` (checker/src/outward.rs) encloses, in z3's model of IEEE binary64.
+; 1. For each operation it rounds, the exact result x lies between pred(RN(x)) and succ(RN(x)):
+;    for every a, b, no binary64 value f lies strictly between the result rounded to nearest and
+;    the result rounded up (or down). The result rounded up is ≥ x and the one rounded down ≤ x,
+;    so with nothing in between, succ(RN(x)) ≥ RU(x) ≥ x and pred(RN(x)) ≤ RD(x) ≤ x, overflow
+;    to ±∞ included. √ is left to the tests: z3 did not settle it within ten minutes here (its
+;    enclosure is tested against MPFR, rounded both ways).
+; 2. `up(r) = r + fma(|r|, 2⁻⁵², 2⁻¹⁰⁷⁴)` is above every finite r, so at or above succ(r), and
+;    leaves +∞ as it is; `down` likewise below (the code maps −∞ up to −MAX and +∞ down to
+;    MAX, the neighbours, by a test). With 1, up(RN(x)) ≥ x ≥ down(RN(x)).
+; Run: z3 checker/proofs/outward.smt2 (expect twelve `unsat`; about a minute).
 (set-logic QF_FP)
 (declare-const a Float64)
 (declare-const b Float64)
@@ -18,3 +21,12 @@
 (push) (assert (and (fp.lt (fp.mul RTN a b) f) (fp.lt f (fp.mul RNE a b)))) (check-sat) (pop)
 (push) (assert (and (fp.lt (fp.div RNE a b) f) (fp.lt f (fp.div RTP a b)))) (check-sat) (pop)
 (push) (assert (and (fp.lt (fp.div RTN a b) f) (fp.lt f (fp.div RNE a b)))) (check-sat) (pop)
+(declare-const r Float64)
+(define-fun ulp1 () Float64 (fp #b0 #b01111001011 #x0000000000000)) ; 2^-52
+(define-fun tiny () Float64 (fp #b0 #b00000000000 #x0000000000001)) ; 2^-1074
+(define-fun up () Float64 (fp.add RNE r (fp.fma RNE (fp.abs r) ulp1 tiny)))
+(define-fun down () Float64 (fp.sub RNE r (fp.fma RNE (fp.abs r) ulp1 tiny)))
+(push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.gt up r)))) (check-sat) (pop)
+(push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.lt down r)))) (check-sat) (pop)
+(push) (assert (and (fp.isInfinite r) (fp.isPositive r) (not (fp.eq up r)))) (check-sat) (pop)
+(push) (assert (and (fp.isInfinite r) (fp.isNegative r) (not (fp.eq down r)))) (check-sat) (pop)

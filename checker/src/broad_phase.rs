@@ -10,19 +10,17 @@
 //! The pairs come out sorted, in the order of the double loop over every pair, so the sums
 //! built from them do not depend on the grid.
 
-use crate::model::Cell;
+use crate::model::{Cell, Images};
 use std::ops::Range;
 
 /// Below this many bodies the double loop is as cheap as the grid.
 const GRID_FROM: usize = 64;
 
-/// Bodies `i < j`, and `shift`: the box lengths taken off j's displacement from i to reach
-/// its nearest image (`Cell::shift`).
+/// Bodies `i < j` (j's nearest image is within reach of i).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Near {
     pub i: usize,
     pub j: usize,
-    pub shift: [f64; 3],
 }
 
 /// The pairs, sorted, whose nearest images are within `reach` (`None`: unbounded, every pair).
@@ -33,19 +31,21 @@ pub fn within(x: &[[f64; 3]], cell: &Option<Cell>, reach: Option<f64>) -> Vec<Ne
 /// The bodies binned once, to list the pairs within reach of any run of bodies.
 pub struct Neighbourhood<'a> {
     x: &'a [[f64; 3]],
-    cell: &'a Option<Cell>,
+    images: Images,
     /// The reach squared (∞: unbounded).
     limit: f64,
     bins: Option<Bins>,
 }
 
 /// The grid, each body's cell, and the bodies by cell (cell m's are `members[start[m]..start[m
-/// + 1]]`, in increasing order).
+/// + 1]]`, in increasing order, at `placed[start[m]..start[m + 1]]`: a cell's positions sit
+/// together).
 struct Bins {
     grid: Grid,
     cells: Vec<[usize; 3]>,
     start: Vec<usize>,
     members: Vec<usize>,
+    placed: Vec<[f64; 3]>,
 }
 
 impl<'a> Neighbourhood<'a> {
@@ -70,35 +70,57 @@ impl<'a> Neighbourhood<'a> {
                 members[fill[grid.index(*c)]] = i;
                 fill[grid.index(*c)] += 1;
             }
-            Bins { grid, cells, start, members }
+            let placed = members.iter().map(|&i| x[i]).collect();
+            Bins { grid, cells, start, members, placed }
         });
-        Neighbourhood { x, cell, limit, bins }
+        Neighbourhood { x, images: Images::of(cell), limit, bins }
     }
 
-    /// The pair if j's nearest image is within reach of i.
-    fn near(&self, i: usize, j: usize) -> Option<Near> {
-        let d: [f64; 3] = std::array::from_fn(|a| self.x[j][a] - self.x[i][a]);
-        let shift = Cell::shift(self.cell, d);
-        let e = Cell::image(self.cell, d);
-        (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= self.limit).then_some(Near { i, j, shift })
+    /// Whether `xj`, body j's position, has its nearest image within reach of body i.
+    #[inline]
+    fn near(&self, i: usize, xj: &[f64; 3]) -> bool {
+        let e = self.images.image(std::array::from_fn(|a| xj[a] - self.x[i][a]));
+        e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= self.limit
     }
 
     /// The pairs (i, j > i) within reach for i in `bodies`, sorted.
     pub fn of(&self, bodies: Range<usize>) -> Vec<Near> {
         let n = self.x.len();
         let Some(b) = &self.bins else {
-            return bodies.flat_map(|i| (i + 1..n).filter_map(move |j| self.near(i, j))).collect();
+            let near = |&(i, j): &(usize, usize)| self.near(i, &self.x[j]);
+            return bodies
+                .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+                .filter(near)
+                .map(|(i, j)| Near { i, j })
+                .collect();
         };
-        let mut pairs = vec![];
+        // every candidate is written and kept by advancing the end: no branch to mispredict
+        let (mut pairs, mut end) = (vec![], 0);
         for i in bodies {
-            let from = pairs.len();
+            let from = end;
             b.grid.around(b.cells[i], |m| {
-                let of = &b.members[b.start[m]..b.start[m + 1]];
-                let after = of.partition_point(|&j| j <= i);
-                pairs.extend(of[after..].iter().filter_map(|&j| self.near(i, j)));
+                let (lo, hi) = (b.start[m], b.start[m + 1]);
+                // the cell's bodies after i (in increasing order: counted, not searched)
+                let after = lo + b.members[lo..hi].iter().filter(|&&j| j <= i).count();
+                if pairs.len() < end + (hi - after) {
+                    pairs.resize(2 * pairs.len() + hi - after, Near { i: 0, j: 0 });
+                }
+                // the tests first, then the compaction: were each write's place to wait for the
+                // test before, every candidate would wait for the last one's whole distance
+                for (js, xs) in b.members[after..hi].chunks(32).zip(b.placed[after..hi].chunks(32)) {
+                    let mut keep = [false; 32];
+                    for (k, xj) in keep.iter_mut().zip(xs) {
+                        *k = self.near(i, xj);
+                    }
+                    for (&j, &k) in js.iter().zip(&keep) {
+                        pairs[end] = Near { i, j };
+                        end += usize::from(k);
+                    }
+                }
             });
-            pairs[from..].sort_unstable_by_key(|p: &Near| p.j);
+            pairs[from..end].sort_unstable_by_key(|p: &Near| p.j);
         }
+        pairs.truncate(end);
         pairs
     }
 }
@@ -189,7 +211,7 @@ mod tests {
                 let d = std::array::from_fn(|a| x[j][a] - x[i][a]);
                 let e = Cell::image(cell, d);
                 if e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= reach * reach {
-                    out.push(Near { i, j, shift: Cell::shift(cell, d) });
+                    out.push(Near { i, j });
                 }
             }
         }
@@ -198,8 +220,7 @@ mod tests {
 
     proptest! {
         /// The grid finds exactly the pairs within reach that the double loop finds, in its
-        /// order and with its images — bodies drifted out of the box, on box edges, open or
-        /// periodic axes.
+        /// order — bodies drifted out of the box, on box edges, open or periodic axes.
         #[test]
         fn the_grid_finds_the_pairs_of_the_double_loop(
             pts in prop::collection::vec(prop::array::uniform3(-30.0f64..60.0), 64..400),

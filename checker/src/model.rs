@@ -58,25 +58,47 @@ pub struct Cell {
 impl Cell {
     /// How many box lengths to take off a displacement `d` along each axis to reach its nearest
     /// image: round(d·(1/L)) on periodic axes, 0 elsewhere. Kernel and checker both choose
-    /// images with this one function. The reciprocal does not depend on `d`, so a loop over
-    /// pairs computes it once (a division per pair and axis was a third of the checker's broad
-    /// phase); within an ulp of a tie between two images either is as near.
-    #[inline]
+    /// images with this one rule (`Images`).
     pub fn shift(cell: &Option<Cell>, d: [f64; 3]) -> [f64; 3] {
-        match cell {
-            None => [0.0; 3],
-            Some(c) => std::array::from_fn(|a| if c.periodic[a] { (d[a] / c.size[a]).round() } else { 0.0 }),
-        }
+        Images::of(cell).shift(d)
     }
 
     /// The nearest image of the displacement `d`, in binary64 (the kernel's fast path).
-    #[inline]
     pub fn image(cell: &Option<Cell>, d: [f64; 3]) -> [f64; 3] {
-        let k = Cell::shift(cell, d);
-        match cell {
-            None => d,
-            Some(c) => std::array::from_fn(|a| d[a] - k[a] * c.size[a]),
-        }
+        Images::of(cell).image(d)
+    }
+}
+
+/// The nearest-image rule of a cell (or of open space), with the box's reciprocal lengths worked
+/// out once: a loop over pairs holds one in registers instead of dividing per pair and axis.
+/// Within an ulp of a tie between two images either is as near. An open axis has length and
+/// reciprocal 0, so the same arithmetic takes nothing off it, without a branch.
+#[derive(Clone, Copy, Debug)]
+pub struct Images {
+    size: [f64; 3],
+    inverse: [f64; 3],
+}
+
+impl Images {
+    pub fn of(cell: &Option<Cell>) -> Images {
+        let open = Images { size: [0.0; 3], inverse: [0.0; 3] };
+        cell.map_or(open, |c| Images {
+            size: std::array::from_fn(|a| if c.periodic[a] { c.size[a] } else { 0.0 }),
+            inverse: std::array::from_fn(|a| if c.periodic[a] { 1.0 / c.size[a] } else { 0.0 }),
+        })
+    }
+
+    /// `Cell::shift` (±0 on open axes).
+    #[inline]
+    pub fn shift(&self, d: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|a| (d[a] * self.inverse[a]).round())
+    }
+
+    /// `Cell::image`: d − k·L (d itself on open axes, but for the sign of a zero).
+    #[inline]
+    pub fn image(&self, d: [f64; 3]) -> [f64; 3] {
+        let k = self.shift(d);
+        std::array::from_fn(|a| d[a] - k[a] * self.size[a])
     }
 }
 

@@ -1,21 +1,22 @@
 //! The checker's fast enclosure: binary64 intervals whose every endpoint is computed in the
-//! default rounding (to nearest) and then stepped one ulp outward.
+//! default rounding (to nearest) and then stepped outward past its neighbour.
 //!
 //! Why it is sound: IEEE 754 rounds + − × ÷ √ correctly, so the computed r = RN(x) is a
 //! binary64 value nearest the exact x. Then pred(r) ≤ x ≤ succ(r): were x above succ(r), succ(r)
 //! would be nearer to x than r (and symmetrically below); at the ends of the range succ(MAX) =
-//! +∞ and pred(+∞) = MAX, which an overflowing x ≥ MAX + ulp/2 still lies above. So each lower
-//! endpoint is `pred` of a rounded bound and each upper one `succ`, and every exact value of
-//! the operation on the enclosed reals lies in between. Rust evaluates these operations in the
-//! default rounding mode and never contracts them into fused operations. z3 proves the step for
-//! + − × ÷ over every binary64 operand in its IEEE model (`checker/proofs/outward.smt2`); the
-//! tests below hold every operation to MPFR over random and extreme operands.
+//! +∞ and pred(+∞) = MAX, which an overflowing x ≥ MAX + ulp/2 still lies above. Each upper
+//! endpoint is then taken to `up(r)`, a binary64 value above r and so at or above succ(r), each
+//! lower one to `down(r)`, and every exact value of the operation on the enclosed reals lies in
+//! between. Rust evaluates these operations in the default rounding mode and never contracts
+//! them into fused operations. z3 proves both steps over every binary64 operand in its IEEE
+//! model, the first for + − × ÷ (`checker/proofs/outward.smt2`); the tests below hold every
+//! operation to MPFR over random and extreme operands.
 //!
 //! Why not inari for this: inari rounds each operation outward by switching the CPU's rounding
 //! mode around it, twice per operation, which made a 32,000-atom checkpoint several times
-//! slower. The price here is one ulp more width per operation. The functions beyond √ (exp, ln,
-//! the trigonometric ones) are not correctly rounded in binary64 libraries, so they go through
-//! inari. An enclosure nothing is known of (a NaN anywhere, √ of a negative interval) is
+//! slower. The price here is up to two ulps more width per operation. The functions beyond √
+//! (exp, ln, the trigonometric ones) are not correctly rounded in binary64 libraries, so they go
+//! through inari. An enclosure nothing is known of (a NaN anywhere, √ of a negative interval) is
 //! `NAN`: every bound it reports is NaN, which the decision never takes for a PASS.
 
 use crate::enclosure::Enclosure;
@@ -49,12 +50,12 @@ impl Outward {
         }
     }
 
-    /// `[pred(lo), succ(hi)]`: the bounds of a correctly rounded result, stepped outward. The
-    /// callers round monotone results of ordered operands, so lo ≤ hi unless a NaN came in;
-    /// pred never gives +∞ nor succ −∞.
+    /// The bounds of a correctly rounded result, stepped outward past their neighbours
+    /// (`down`, `up`). The callers round monotone results of ordered operands, so lo ≤ hi unless
+    /// a NaN came in; `down` never gives +∞ nor `up` −∞.
     #[inline]
     fn rounded(lo: f64, hi: f64) -> Outward {
-        Outward { lo: lo.next_down(), hi: hi.next_up() }
+        Outward { lo: down(lo), hi: up(hi) }
     }
 
     fn is_nan(&self) -> bool {
@@ -105,6 +106,35 @@ impl Outward {
             return if operands_nan { Outward::NAN } else { Outward::ENTIRE };
         }
         Outward::rounded(p[0].min(p[1]).min(p[2].min(p[3])), p[0].max(p[1]).max(p[2].max(p[3])))
+    }
+}
+
+/// |r|·2⁻⁵² + 2⁻¹⁰⁷⁴, in one rounding: at least the gap from r to either neighbour (an ulp, or the
+/// least subnormal near zero).
+#[inline]
+fn gap(r: f64) -> f64 {
+    r.abs().mul_add(f64::EPSILON, f64::from_bits(1))
+}
+
+/// A binary64 value above r, a few neighbours up at most (+∞ stays, −∞ becomes −MAX): above
+/// it, so at or above succ(r), as z3 proves for every binary64 r (`checker/proofs/outward.smt2`).
+/// A few instructions and no branch, where `f64::next_up` tests for NaN, ∞, zero and sign.
+#[inline]
+fn up(r: f64) -> f64 {
+    if r == f64::NEG_INFINITY {
+        -f64::MAX
+    } else {
+        r + gap(r)
+    }
+}
+
+/// A binary64 value below r, a few neighbours down at most (−∞ stays, +∞ becomes MAX).
+#[inline]
+fn down(r: f64) -> f64 {
+    if r == f64::INFINITY {
+        f64::MAX
+    } else {
+        r - gap(r)
     }
 }
 
@@ -179,8 +209,8 @@ impl Real for Outward {
         if !(self.hi >= 0.0) {
             return Outward::NAN;
         }
-        let lo = if self.lo > 0.0 { self.lo.sqrt().next_down().max(0.0) } else { 0.0 };
-        Outward { lo, hi: self.hi.sqrt().next_up() }
+        let lo = if self.lo > 0.0 { down(self.lo.sqrt()).max(0.0) } else { 0.0 };
+        Outward { lo, hi: up(self.hi.sqrt()) }
     }
     /// By squaring and multiplying, each step rounded outward.
     #[inline]
@@ -341,6 +371,13 @@ mod tests {
             prop_assert!(holds(a.powi(n), &pow(lo, Round::Down), &pow(hi, Round::Up)), "{a:?}^{n} = {:?}", a.powi(n));
         }
 
+        /// `up` and `down` pass a value's neighbours, by one or two steps.
+        #[test]
+        fn up_and_down_pass_the_neighbours(r in value().prop_filter("finite", |r| r.is_finite())) {
+            prop_assert!(up(r) >= r.next_up() && up(r) <= r.next_up().next_up().next_up());
+            prop_assert!(down(r) <= r.next_down() && down(r) >= r.next_down().next_down().next_down());
+        }
+
         /// A square across zero starts at zero, and is never below it.
         #[test]
         fn squares_are_non_negative(a in interval()) {
@@ -398,6 +435,22 @@ mod tests {
     #[test]
     fn the_width_is_a_few_ulps() {
         let third = Outward::point(1.0) / Outward::point(3.0);
-        assert_eq!(third.hi.to_bits() - third.lo.to_bits(), 2);
+        assert!((2..=4).contains(&(third.hi.to_bits() - third.lo.to_bits())), "{third:?}");
+    }
+
+    #[test]
+    fn up_and_down_pass_the_neighbours_of_special_values() {
+        let tiny = f64::from_bits(1);
+        for r in [0.0, -0.0, tiny, -tiny, f64::MIN_POSITIVE, 1.0, -1.0, 0.5 - f64::EPSILON / 4.0, f64::MAX, -f64::MAX] {
+            assert!(up(r) >= r.next_up() && up(r) <= r.next_up().next_up().next_up(), "{r:e}: {:e}", up(r));
+            assert!(
+                down(r) <= r.next_down() && down(r) >= r.next_down().next_down().next_down(),
+                "{r:e}: {:e}",
+                down(r)
+            );
+        }
+        assert_eq!((up(f64::INFINITY), down(f64::NEG_INFINITY)), (f64::INFINITY, f64::NEG_INFINITY));
+        assert_eq!((up(f64::NEG_INFINITY), down(f64::INFINITY)), (-f64::MAX, f64::MAX));
+        assert!(up(f64::NAN).is_nan() && down(f64::NAN).is_nan());
     }
 }

@@ -2,7 +2,7 @@
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
 use crate::broad_phase::Neighbourhood;
-use crate::model::{Cell, Model, Snapshot, TermInstance};
+use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
 use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Shape, Site};
 use std::borrow::Cow;
@@ -15,6 +15,7 @@ pub struct Lifted<R> {
     /// The exact positions, to choose periodic images from.
     x: Vec<[f64; 3]>,
     cell: Option<Cell>,
+    images: Images,
     /// Threads to sum pair terms on (the bits are the same for any count).
     threads: usize,
 }
@@ -37,7 +38,15 @@ impl<R: Real + Send + Sync> Lifted<R> {
         // each instance's parameters, then its constants (`Definition::constants`), once
         let lifted = |t: &TermInstance| -> Vec<R> { t.params.iter().map(|&c| proto.lift(c)).collect() };
         let params = model.terms.iter().map(|t| [lifted(t), t.kind.constants(&lifted(t))].concat()).collect();
-        Lifted { sites, params, zero: proto.lift(0.0), x: s.x.to_vec(), cell: model.cell, threads: 1 }
+        Lifted {
+            sites,
+            params,
+            zero: proto.lift(0.0),
+            x: s.x.to_vec(),
+            cell: model.cell,
+            images: Images::of(&model.cell),
+            threads: 1,
+        }
     }
 
     /// The same, summing pair terms on `n` threads.
@@ -49,11 +58,7 @@ impl<R: Real + Send + Sync> Lifted<R> {
     /// x_j − k·L with k chosen from the exact positions (`Cell::shift`) and the shift evaluated
     /// in `R`.
     fn seen_from(&self, i: usize, j: usize) -> Cow<'_, Site<R>> {
-        self.shifted(j, Cell::shift(&self.cell, std::array::from_fn(|a| self.x[j][a] - self.x[i][a])))
-    }
-
-    /// Site `j` moved by `k` box lengths (none: itself).
-    fn shifted(&self, j: usize, k: [f64; 3]) -> Cow<'_, Site<R>> {
+        let k = self.images.shift(std::array::from_fn(|a| self.x[j][a] - self.x[i][a]));
         match &self.cell {
             Some(c) if k != [0.0; 3] => {
                 let mut s = self.sites[j].clone();
@@ -100,10 +105,7 @@ impl<R: Real + Send + Sync> Lifted<R> {
                     let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
                         let pairs = near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies));
-                        fold(
-                            start,
-                            &mut pairs.iter().map(|p| term(n, &[&self.sites[p.i], &self.shifted(p.j, p.shift)])),
-                        )
+                        fold(start, &mut pairs.iter().map(|p| term(n, &[&self.sites[p.i], &self.seen_from(p.i, p.j)])))
                     });
                     acc = sums.into_iter().reduce(&add).unwrap_or(acc);
                 }

@@ -36,6 +36,7 @@ pub trait Real:
 /// `yes()` if `cond`, `no()` if not, and for an undecided enclosure the hull of both: the cutoff
 /// primitive, exact for points and sound for intervals. Lazy: a pair beyond its cutoff costs
 /// one comparison.
+#[inline]
 pub fn select<R: Real>(cond: Option<bool>, yes: impl FnOnce() -> R, no: impl FnOnce() -> R) -> R {
     match cond {
         Some(true) => yes(),
@@ -117,10 +118,12 @@ impl Real for Float {
 /// A point in space as three reals.
 pub type Vec3<R> = [R; 3];
 
+#[inline]
 pub fn sub3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
     [a[0].clone() - b[0].clone(), a[1].clone() - b[1].clone(), a[2].clone() - b[2].clone()]
 }
 
+#[inline]
 pub fn dot3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {
     a[0].clone() * b[0].clone() + a[1].clone() * b[1].clone() + a[2].clone() * b[2].clone()
 }
@@ -133,6 +136,7 @@ pub fn cross3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
 }
 
 /// |a|², written with `powi` so that an interval enclosure stays non-negative and tight.
+#[inline]
 pub fn norm2<R: Real>(a: &Vec3<R>) -> R {
     a[0].clone().powi(2) + a[1].clone().powi(2) + a[2].clone().powi(2)
 }

@@ -2,7 +2,7 @@
 //! kind so the kernel dispatches once per group, not once per edge. A kind the scene does not
 //! use has no group and costs nothing.
 
-use crate::forces::{group, Force, Frame, Pool, Singularity};
+use crate::forces::{group, Force, Frame, Parts, Pool, Singularity};
 use crate::state::State;
 use crate::sum::Sum;
 use lagra_checker::model::Model;
@@ -81,6 +81,19 @@ impl LagrangianGraph {
     /// Writes the generalized forces into `f`, and nothing else: for the steps no one sees.
     pub fn forces_only(&self, s: &State, f: &mut [[f64; 3]]) -> Result<(), Singularity> {
         self.evaluate(s, f, false).map(|_| ())
+    }
+
+    /// The graph's only group, if it has one.
+    pub fn sole(&self) -> Option<&dyn Force> {
+        match self.groups.as_slice() {
+            [(_, g)] => Some(g.as_ref()),
+            _ => None,
+        }
+    }
+
+    /// What a force group reads of the bodies besides the state: masses, charges, colours.
+    pub fn frame_parts(&self) -> Parts<'_> {
+        Parts { m: &self.masses, q: &self.charges, c: &self.colours }
     }
 
     fn evaluate(&self, s: &State, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {

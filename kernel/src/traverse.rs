@@ -3,7 +3,7 @@
 //! allows, each pair once: Newton's third law). Bodies are binned by counting sort, so
 //! the order of visits depends on the positions alone, never on threads.
 
-use lagra_checker::model::Cell;
+use lagra_checker::model::{Cell, Images};
 use std::ops::Range;
 
 /// Below this many bodies the plain double loop is as fast.
@@ -21,10 +21,11 @@ pub fn pairs<E>(
     reach: Option<f64>,
     mut visit: impl FnMut(usize, usize, [f64; 3]) -> Result<(), E>,
 ) -> Result<(), E> {
+    let images = Images::of(cell);
     let Some(binned) = reach.and_then(|r| Binned::new(x, cell, r)) else {
         for i in 0..x.len() {
             for j in i + 1..x.len() {
-                visit(i, j, Cell::image(cell, sub(&x[j], &x[i])))?;
+                visit(i, j, images.image(sub(&x[j], &x[i])))?;
             }
         }
         return Ok(());
@@ -36,7 +37,7 @@ pub fn pairs<E>(
         for (run, _) in runs {
             for &j in &order[run.clone()] {
                 if result.is_ok() {
-                    result = visit(i, j, Cell::image(cell, sub(&x[j], &x[i])));
+                    result = visit(i, j, images.image(sub(&x[j], &x[i])));
                 }
             }
         }

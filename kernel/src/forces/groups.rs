@@ -1,10 +1,11 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
-use super::{sub, Bonded, Field, Force, Frame, Paired, Pool, Singularity};
+use super::{stride_alone, sub, Bonded, Field, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::neighbours::{Neighbours, Pair};
+use crate::solvers::Stride;
 use crate::sum::Sum;
 use crate::traverse;
-use lagra_checker::model::{Cell, Model, TermInstance};
+use lagra_checker::model::{Cell, Images, Model, TermInstance};
 use lagra_checker::terms::Kind;
 use rayon::prelude::*;
 use std::marker::PhantomData;
@@ -62,7 +63,8 @@ pub struct Bonds<T, const N: usize> {
     name: &'static str,
     sites: Vec<[usize; N]>,
     rows: Rows,
-    cell: Option<Cell>,
+    /// In a periodic cell, its image rule.
+    images: Option<Images>,
     velocity: bool,
     term: PhantomData<T>,
 }
@@ -72,22 +74,26 @@ impl<T: Bonded<N> + Send + Sync + 'static, const N: usize> Bonds<T, N> {
         let rows = Rows::new(kind, t);
         let velocity = (0..t.len()).any(|k| T::velocity_dependent(rows.row(k)));
         let sites = t.iter().map(|t| std::array::from_fn(|i| t.sites[i])).collect();
-        Box::new(Bonds::<T, N> { name: kind.name(), sites, rows, cell: m.cell, velocity, term: PhantomData })
+        let images = m.cell.map(|c| Images::of(&Some(c)));
+        Box::new(Bonds::<T, N> { name: kind.name(), sites, rows, images, velocity, term: PhantomData })
     }
 }
 
 impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
-    /// (The energy of a few bonds costs next to nothing: it is always summed.)
-    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], _energy: bool) -> Result<f64, Singularity> {
-        let mut energy = Sum::default();
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+        stride_alone(self, stride, parts)
+    }
+    #[inline(always)]
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
+        let mut sum = Sum::default();
         for (k, b) in self.sites.iter().enumerate() {
             // positions relative to the first body, by minimum image in a periodic cell
-            let x: [[f64; 3]; N] = match &self.cell {
+            let x: [[f64; 3]; N] = match &self.images {
                 None => std::array::from_fn(|i| s.x[b[i]]),
-                Some(_) => {
+                Some(images) => {
                     let x0 = s.x[b[0]];
                     std::array::from_fn(|i| {
-                        let d = Cell::image(&self.cell, sub(&s.x[b[i]], &x0));
+                        let d = images.image(sub(&s.x[b[i]], &x0));
                         [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
                     })
                 }
@@ -104,9 +110,11 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
                     f[*i][c] += fi[c];
                 }
             }
-            energy.add(e);
+            if energy {
+                sum.add(e);
+            }
         }
-        Ok(energy.value())
+        Ok(sum.value())
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
@@ -293,6 +301,9 @@ fn colour<T: Paired>(s: &Frame, i: usize, j: usize) -> f64 {
 }
 
 impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+        stride_alone(self, stride, parts)
+    }
     /// Through a Verlet list, the energy only if asked (it is a fifth of a pair's arithmetic).
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         let Some(list) = &self.list else { return self.traversed(s, f) };
@@ -349,6 +360,9 @@ impl<T: Field + Send + Sync + 'static> Fields<T> {
 }
 
 impl<T: Field + Send + Sync> Force for Fields<T> {
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+        stride_alone(self, stride, parts)
+    }
     /// (One term per body: the energy is always summed.)
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], _energy: bool) -> Result<f64, Singularity> {
         let mut energy = Sum::default();

@@ -31,6 +31,8 @@ mod yukawa;
 #[cfg(test)]
 pub(crate) mod dual;
 
+use crate::solvers::Stride;
+use crate::state::State;
 use groups::{Bonds, Fields, Pairs};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
@@ -61,8 +63,34 @@ pub struct Frame<'a> {
     pub c: &'a [[f64; 2]],
 }
 
+/// The bodies' masses, charges and colours: a `Frame` without the state.
+#[derive(Clone, Copy)]
+pub struct Parts<'a> {
+    pub m: &'a [f64],
+    pub q: &'a [f64],
+    pub c: &'a [[f64; 2]],
+}
+
+impl<'a> Parts<'a> {
+    pub fn frame<'s>(&self, s: &'s State) -> Frame<'s>
+    where
+        'a: 's,
+    {
+        Frame { x: &s.x, v: &s.v, m: self.m, q: self.q, c: self.c }
+    }
+}
+
+/// The solver's inner steps with `group` the whole force field, monomorphized around it: the
+/// forces accumulated (onto the zeros the kick leaves), no energy.
+#[inline]
+fn stride_alone<G: Force>(group: &G, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+    stride.run(|s, f| group.accumulate(&parts.frame(s), f, false).map(|_| ()))
+}
+
 /// A homogeneous group of term instances.
 pub trait Force: Send + Sync {
+    /// The solver's inner steps with this group alone in the graph (`stride_alone`).
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity>;
     /// Adds the group's generalized forces to `f` and returns its potential energy, if
     /// `energy` (0 if not: a step no one looks at needs only the forces).
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity>;

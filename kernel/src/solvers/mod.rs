@@ -4,7 +4,7 @@ mod rk4;
 mod velocity_verlet;
 mod yoshida;
 
-pub use velocity_verlet::VelocityVerlet;
+pub use velocity_verlet::{Stride, VelocityVerlet};
 
 use crate::forces::Singularity;
 use crate::graph::LagrangianGraph;

@@ -33,7 +33,7 @@ impl VelocityVerlet {
     /// Advances positions and velocities by `h` (the step counter and clock are the caller's).
     pub fn advance(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Singularity> {
         let h = 0.5 * dt;
-        kick_drift(&mut s.x, &mut s.v, &self.f, &g.inverse_masses, (h, dt), false);
+        kick_drift(&mut s.x, &mut s.v, &mut self.f, &g.inverse_masses, (h, dt), false);
         let half = if g.velocity_dependent() { Some(s.v.clone()) } else { None };
         self.potential = g.forces(s, &mut self.f)?;
         kick(&mut s.v, &self.f, &g.inverse_masses, h);
@@ -72,12 +72,12 @@ impl VelocityVerlet {
             return Ok(());
         }
         let h = 0.5 * dt;
-        kick_drift(&mut s.x, &mut s.v, &self.f, &g.inverse_masses, (h, dt), false);
-        while s.step + 1 < until {
-            // forces only: the force loops refuse a non-finite force, so no NaN passes unseen
-            g.forces_only(s, &mut self.f)?;
-            kick_drift(&mut s.x, &mut s.v, &self.f, &g.inverse_masses, (h, dt), true);
-            tick(s, dt);
+        kick_drift(&mut s.x, &mut s.v, &mut self.f, &g.inverse_masses, (h, dt), false);
+        // forces only: the force loops refuse a non-finite force, so no NaN passes unseen
+        let stride = Stride { s, f: &mut self.f, inverse: &g.inverse_masses, h, dt, until };
+        match g.sole() {
+            Some(group) => group.stride(stride, g.frame_parts())?,
+            None => stride.run(|s, f| g.forces_only(s, f))?,
         }
         self.potential = g.forces(s, &mut self.f)?;
         kick(&mut s.v, &self.f, &g.inverse_masses, h);
@@ -86,17 +86,47 @@ impl VelocityVerlet {
     }
 }
 
+/// The steps before the last of a conservative `advance_to`: forces only, then the closing kick,
+/// the next opening kick and the drift. A graph of one group runs them monomorphized around
+/// that group's force code (`Force::stride`); any other through the graph.
+pub struct Stride<'a> {
+    s: &'a mut State,
+    f: &'a mut Vec<[f64; 3]>,
+    inverse: &'a [f64],
+    h: f64,
+    dt: f64,
+    until: u64,
+}
+
+impl Stride<'_> {
+    /// Steps until one step before `until`, with `forces` adding the forces at a state to `f`,
+    /// which it finds zeroed.
+    #[inline]
+    pub fn run(
+        self,
+        mut forces: impl FnMut(&State, &mut [[f64; 3]]) -> Result<(), Singularity>,
+    ) -> Result<(), Singularity> {
+        while self.s.step + 1 < self.until {
+            forces(self.s, self.f)?;
+            kick_drift(&mut self.s.x, &mut self.s.v, self.f, self.inverse, (self.h, self.dt), true);
+            tick(self.s, self.dt);
+        }
+        Ok(())
+    }
+}
+
 /// One pass over the bodies: v += h·F/m (twice with `closing`: the closing kick of a step, then
-/// the opening kick of the next, with the same forces), then x += dt·v.
+/// the opening kick of the next, with the same forces), then x += dt·v; and the forces, spent,
+/// are zeroed for the next evaluation to add to (no pass of their own).
 fn kick_drift(
     x: &mut [[f64; 3]],
     v: &mut [[f64; 3]],
-    f: &[[f64; 3]],
+    f: &mut [[f64; 3]],
     inverse: &[f64],
     (h, dt): (f64, f64),
     closing: bool,
 ) {
-    for (((x, v), f), w) in x.iter_mut().zip(v.iter_mut()).zip(f).zip(inverse) {
+    for (((x, v), f), w) in x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse) {
         let s = h * w;
         for c in 0..3 {
             if closing {
@@ -105,6 +135,7 @@ fn kick_drift(
             v[c] += s * f[c];
             x[c] += dt * v[c];
         }
+        *f = [0.0; 3];
     }
 }
 
