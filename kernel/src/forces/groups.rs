@@ -13,16 +13,17 @@ use std::ops::Range;
 use std::sync::Mutex;
 
 /// A term's result must be finite: where its formula overflows binary64 (bodies closer than its
-/// singularity allows) that is a clear error, never a NaN handed to the solver.
+/// singularity allows) that is a clear error, never a NaN handed to the solver. The energy is
+/// checked where it is wanted (`energy`); a step no one sees hands the solver its forces only.
 trait Finite: Sized {
-    fn finite(self) -> Result<Self, &'static str>;
+    fn finite(self, energy: bool) -> Result<Self, &'static str>;
 }
 
 const OVERFLOW: &str = "so close to a singular configuration that the force overflows binary64";
 
 impl<const N: usize> Finite for ([[f64; 3]; N], f64) {
-    fn finite(self) -> Result<Self, &'static str> {
-        if self.1.is_finite() && self.0.iter().flatten().all(|c| c.is_finite()) {
+    fn finite(self, energy: bool) -> Result<Self, &'static str> {
+        if (!energy || self.1.is_finite()) && self.0.iter().flatten().all(|c| c.is_finite()) {
             Ok(self)
         } else {
             Err(OVERFLOW)
@@ -31,8 +32,8 @@ impl<const N: usize> Finite for ([[f64; 3]; N], f64) {
 }
 
 impl Finite for ([f64; 3], f64) {
-    fn finite(self) -> Result<Self, &'static str> {
-        if self.1.is_finite() && self.0.iter().all(|c| c.is_finite()) {
+    fn finite(self, energy: bool) -> Result<Self, &'static str> {
+        if (!energy || self.1.is_finite()) && self.0.iter().all(|c| c.is_finite()) {
             Ok(self)
         } else {
             Err(OVERFLOW)
@@ -100,11 +101,9 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
             };
             // velocities only for a group that reads them (`Bonded::velocity_dependent`)
             let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
-            let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(Finite::finite).map_err(|what| Singularity {
-                term: self.name,
-                bodies: b.to_vec(),
-                what,
-            })?;
+            let (fs, e) = T::eval(self.rows.row(k), &x, &v)
+                .and_then(|r| r.finite(energy))
+                .map_err(|what| Singularity { term: self.name, bodies: b.to_vec(), what })?;
             for (i, fi) in b.iter().zip(fs) {
                 for c in 0..3 {
                     f[*i][c] += fi[c];
@@ -262,7 +261,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
             for p in &self.rows {
-                let (a, e) = T::eval(p, d, mq, colour).and_then(Finite::finite).map_err(|what| Singularity {
+                let (a, e) = T::eval(p, d, mq, colour).and_then(|r| r.finite(true)).map_err(|what| Singularity {
                     term: self.name,
                     bodies: vec![i, j],
                     what,
@@ -369,7 +368,7 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
         for (p, on) in self.rows.iter().zip(&self.on) {
             let mut one = |i: usize| -> Result<(), Singularity> {
                 let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i])
-                    .and_then(Finite::finite)
+                    .and_then(|r| r.finite(true))
                     .map_err(|what| Singularity { term: self.name, bodies: vec![i], what })?;
                 for c in 0..3 {
                     f[i][c] += a[c];

@@ -12,11 +12,14 @@ impl Bonded<2> for Fast {
         if r == 0.0 {
             return Err("at the same point, where the bond's direction is undefined");
         }
-        // one division per bond; the damping's ṙ only where there is damping
+        // one division per bond; the damping's ṙ only where there is damping (not even a + 0)
         let inv = 1.0 / r;
-        let damping =
-            if gamma == 0.0 { 0.0 } else { gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv };
-        let s = (k * (r - r0) + damping) * inv;
+        let spring = k * (r - r0);
+        let s = if gamma == 0.0 {
+            spring * inv
+        } else {
+            (spring + gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv) * inv
+        };
         let a = d.map(|c| c * s);
         Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))
     }

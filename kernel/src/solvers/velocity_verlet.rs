@@ -106,11 +106,18 @@ impl Stride<'_> {
         self,
         mut forces: impl FnMut(&State, &mut [[f64; 3]]) -> Result<(), Singularity>,
     ) -> Result<(), Singularity> {
-        while self.s.step + 1 < self.until {
-            forces(self.s, self.f)?;
+        // the clock is set once at the end (t = step·dt: the same bits); no force reads it
+        let (first, last) = (self.s.step, self.until.saturating_sub(1).max(self.s.step));
+        for step in first..last {
+            if let Err(e) = forces(self.s, self.f) {
+                self.s.step = step;
+                self.s.t = step as f64 * self.dt;
+                return Err(e);
+            }
             kick_drift(&mut self.s.x, &mut self.s.v, self.f, self.inverse, (self.h, self.dt), true);
-            tick(self.s, self.dt);
         }
+        self.s.step = last;
+        self.s.t = last as f64 * self.dt;
         Ok(())
     }
 }
