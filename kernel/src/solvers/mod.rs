@@ -90,10 +90,15 @@ impl Stepper {
     }
 }
 
-/// The step counter and the clock after one step (t = step·dt, never accumulated).
+/// The step counter and the clock after one step.
 fn tick(s: &mut State, dt: f64) {
-    s.step += 1;
-    s.t = s.step as f64 * dt;
+    set_step(s, s.step + 1, dt);
+}
+
+/// The step counter and the clock at `step` (t = step·dt, never accumulated).
+fn set_step(s: &mut State, step: u64, dt: f64) {
+    s.step = step;
+    s.t = step as f64 * dt;
 }
 
 #[cfg(test)]

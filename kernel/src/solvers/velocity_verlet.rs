@@ -7,7 +7,7 @@
 //! at the velocity of its own end of the step. Evaluating the damping at the half-step velocity
 //! instead would lag it by ½dt and make the dissipated energy first-order wrong.
 
-use super::tick;
+use super::{set_step, tick};
 use crate::forces::Singularity;
 use crate::graph::LagrangianGraph;
 use crate::state::State;
@@ -107,18 +107,17 @@ impl Stride<'_> {
         mut forces: impl FnMut(&State, &mut [[f64; 3]]) -> Result<(), Singularity>,
     ) -> Result<(), Singularity> {
         // the clock is set once at the end (t = step·dt: the same bits); no force reads it
-        let (first, last) = (self.s.step, self.until.saturating_sub(1).max(self.s.step));
-        for step in first..last {
+        let (mut step, mut done) = (self.s.step, Ok(()));
+        while step + 1 < self.until {
             if let Err(e) = forces(self.s, self.f) {
-                self.s.step = step;
-                self.s.t = step as f64 * self.dt;
-                return Err(e);
+                done = Err(e);
+                break;
             }
             kick_drift(&mut self.s.x, &mut self.s.v, self.f, self.inverse, (self.h, self.dt), true);
+            step += 1;
         }
-        self.s.step = last;
-        self.s.t = last as f64 * self.dt;
-        Ok(())
+        set_step(self.s, step, self.dt);
+        done
     }
 }
 
