@@ -3,6 +3,7 @@
 //! checkpoint that binary64 intervals cannot decide is re-evaluated with MPFR intervals at rising
 //! precision, up to a cap, before it is left undecided.
 
+use crate::certificate::{Mark, Trail};
 use crate::claims::{Claim, ClaimKind};
 use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, Verdict, BINARY64};
 use crate::enclosure::Enclosure;
@@ -11,7 +12,6 @@ use crate::mpfi::Mpfi;
 use crate::outward::Outward;
 use crate::quantities::Lifted;
 use crate::terms::Kind;
-use serde::{Deserialize, Serialize};
 
 /// Unit round-off of binary64.
 const U: f64 = f64::EPSILON / 2.0;
@@ -38,73 +38,6 @@ impl std::fmt::Display for Halt {
             Halt::InvalidState(m) => write!(f, "halted: {m}"),
         }
     }
-}
-
-/// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, the tolerance it was held to
-/// (declared, or the round-off budget at that step) and the precision that produced the
-/// enclosure. Written as `[step, lo, hi, tol, precision]`; the numbers as exact binary64 JSON
-/// numbers, the infinities as the strings "inf" and "-inf", an empty enclosure as "nan".
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(into = "MarkRepr", try_from = "MarkRepr")]
-pub struct Mark {
-    pub step: u64,
-    pub lo: f64,
-    pub hi: f64,
-    pub tol: f64,
-    pub precision: Precision,
-}
-
-impl Mark {
-    /// Equal to the last bit, NaN included.
-    pub fn same(&self, o: &Mark) -> bool {
-        let bits = |m: &Mark| (m.step, m.lo.to_bits(), m.hi.to_bits(), m.tol.to_bits(), m.precision);
-        bits(self) == bits(o)
-    }
-}
-
-#[derive(Serialize, Deserialize)]
-struct MarkRepr(u64, Exact, Exact, Exact, Precision);
-
-/// A binary64 value that survives JSON: finite values as numbers, the rest as strings.
-#[derive(Serialize, Deserialize)]
-#[serde(untagged)]
-enum Exact {
-    Finite(f64),
-    Special(String),
-}
-
-impl From<Mark> for MarkRepr {
-    fn from(m: Mark) -> Self {
-        let e = |x: f64| match x {
-            x if x.is_finite() => Exact::Finite(x),
-            x if x > 0.0 => Exact::Special("inf".into()),
-            x if x < 0.0 => Exact::Special("-inf".into()),
-            _ => Exact::Special("nan".into()),
-        };
-        MarkRepr(m.step, e(m.lo), e(m.hi), e(m.tol), m.precision)
-    }
-}
-
-impl TryFrom<MarkRepr> for Mark {
-    type Error = String;
-    fn try_from(r: MarkRepr) -> Result<Self, String> {
-        let e = |x: Exact| match x {
-            Exact::Finite(x) => Ok(x),
-            Exact::Special(s) => match s.as_str() {
-                "inf" => Ok(f64::INFINITY),
-                "-inf" => Ok(f64::NEG_INFINITY),
-                "nan" => Ok(f64::NAN),
-                _ => Err(format!("`{s}` is not a binary64 value")),
-            },
-        };
-        Ok(Mark { step: r.0, lo: e(r.1)?, hi: e(r.2)?, tol: e(r.3)?, precision: r.4 })
-    }
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Trail {
-    pub claim: ClaimKind,
-    pub marks: Vec<Mark>,
 }
 
 /// Energy removed by dissipative terms, integrated by the trapezoid rule over every step.
@@ -542,21 +475,6 @@ mod tests {
         let out = m.finish();
         assert!(matches!(out.verdicts[0], Verdict::Undecided(Breach { precision: 1024, .. })), "{:?}", out.verdicts[0]);
         assert_eq!(out.trails[0].marks[0].precision, 1024);
-    }
-
-    #[test]
-    fn marks_round_trip_through_json_exactly() {
-        let marks = [
-            Mark { step: 3, lo: 1.0000000000000002e-300, hi: f64::INFINITY, tol: 1e-5, precision: 53 },
-            Mark { step: 4, lo: f64::NEG_INFINITY, hi: 4.9e-324, tol: 0.1, precision: 1024 },
-        ];
-        let text = serde_json::to_string(&marks).unwrap();
-        assert_eq!(text, r#"[[3,1.0000000000000002e-300,"inf",0.00001,53],[4,"-inf",5e-324,0.1,1024]]"#);
-        let back: Vec<Mark> = serde_json::from_str(&text).unwrap();
-        assert_eq!(back, marks);
-        let nan: Mark = serde_json::from_str(r#"[1,"nan","nan",1,53]"#).unwrap();
-        assert!(nan.lo.is_nan() && nan.same(&nan));
-        assert!(serde_json::from_str::<Mark>(r#"[1,"zero",0,1,53]"#).is_err());
     }
 
     #[test]

@@ -2,11 +2,11 @@
 //! given (every enclosure evaluated again), or else from the recorded enclosures (the decision
 //! made again, the enclosures taken on trust).
 
-use crate::certificate::Certificate;
+use crate::certificate::{Certificate, Trail};
 use crate::checksum::label;
 use crate::claims::ClaimKind;
 use crate::decision::{decide_static, Judge, Verdict};
-use crate::monitor::{balance_terms, dimensions, is_balance, Monitor, Trail};
+use crate::monitor::{balance_terms, dimensions, is_balance, Monitor};
 use crate::render::lines;
 use crate::states::States;
 

@@ -36,10 +36,12 @@ pub fn count_for(bodies: u64, len: u64) -> Option<u64> {
 /// proptest and exhaustively here and by Kani where Kani is installed (`proofs`).
 #[cfg(any(test, kani, kani_typecheck))]
 pub fn lengths_are_exact(bodies: u64, count: u64) -> bool {
-    let exact = (u128::from(bodies) * 48 + 16) * u128::from(count) + u128::from(HEADER + TRAILER);
+    // (2⁶⁴·48 + 16)·2⁶⁴ overflows even u128: the oracle checks its own arithmetic too (Kani would)
+    let record = u128::from(bodies) * 48 + 16;
+    let exact = record.checked_mul(u128::from(count)).and_then(|b| b.checked_add(u128::from(HEADER + TRAILER)));
     match file_len(bodies, count) {
-        Some(len) => u128::from(len) == exact && count_for(bodies, len) == Some(count),
-        None => exact > u128::from(u64::MAX) || u128::from(bodies) * 48 + 16 > u128::from(u64::MAX),
+        Some(len) => exact == Some(u128::from(len)) && count_for(bodies, len) == Some(count),
+        None => exact.is_none_or(|e| e > u128::from(u64::MAX)) || record > u128::from(u64::MAX),
     }
 }
 
