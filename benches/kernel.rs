@@ -4,6 +4,7 @@
 //! and sizes compare.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use lagra_checker::broad_phase::within;
 use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
 use lagra_checker::monitor::Monitor;
 use lagra_checker::terms::{Kind, Shape};
@@ -105,6 +106,10 @@ fn neighbour_build(c: &mut Criterion) {
             list.update(black_box(&lj.x0), &lj.model.cell, None);
             black_box(list.count())
         })
+    });
+    // the checker's own pair list, at the reach its energy sum asks for
+    group.bench_function("checker_lj_32k", |b| {
+        b.iter(|| black_box(within(black_box(&lj.x0), &lj.model.cell, Some(2.5 * (1.0 + 1e-6))).len()))
     });
     group.finish();
 }

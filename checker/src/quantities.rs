@@ -95,10 +95,10 @@ impl<R: Real + Send + Sync> Lifted<R> {
                 Shape::External if t.sites.is_empty() => acc = fold(acc, &mut self.sites.iter().map(|s| term(n, &[s]))),
                 Shape::External => acc = fold(acc, &mut t.sites.iter().map(|&i| term(n, &[&self.sites[i]]))),
                 Shape::Pairwise => {
-                    // Broad phase: a pair farther than the term's reach by a relative margin of
-                    // 1e-6 (far more than any enclosure of r² is wide) contributes exactly zero.
-                    // The pairs within it come from a grid (`broad_phase`), in the double loop's
-                    // order, each with its nearest image.
+                    // Broad phase: a pair whose nearest image is beyond the term's reach
+                    // contributes exactly zero, so leaving it out is exact. The broad phase keeps
+                    // every pair within the reach (asked for with a relative margin of 1e-6 on
+                    // top), from a grid, in the double loop's order, each with its nearest image.
                     let reach = t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6));
                     let near = Neighbourhood::new(&self.x, &self.cell, reach);
                     let bodies = self.x.len();
