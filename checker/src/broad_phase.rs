@@ -129,8 +129,9 @@ impl<'a> Neighbourhood<'a> {
 }
 
 /// What rounding can do to a computed image displacement, from M + L (the largest coordinate
-/// and the longest box side). Each component d − k·L is three roundings (the difference, the
-/// shift k·L, the two subtracted), each off by at most 2⁻⁵³ of a value below 2M + L + the
+/// and the longest box side). For the image k that `Images::shift` picks (the one the sum then
+/// evaluates), each component d − k·L is three roundings (the difference, the shift k·L, the
+/// two subtracted), each off by at most 2⁻⁵³ of a value below 2M + L + the
 /// component, so within η = 2⁻⁵⁰(M + L + r) of the exact one while that is within a reach r;
 /// the distance then within √3·η < 2η, and its square, three roundings more, within a relative
 /// 2⁻⁵⁰. The bound a computed squared distance is held to is ((r + 2η)(1 + 2⁻⁴⁸))², the last
