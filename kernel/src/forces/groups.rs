@@ -21,23 +21,24 @@ trait Finite: Sized {
 
 const OVERFLOW: &str = "so close to a singular configuration that the force overflows binary64";
 
+/// Whether a force's coordinates, and its energy if it counts, are finite.
+fn all_finite(force: &[f64], e: f64, energy: bool) -> Result<(), &'static str> {
+    if (!energy || e.is_finite()) && force.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(OVERFLOW)
+    }
+}
+
 impl<const N: usize> Finite for ([[f64; 3]; N], f64) {
     fn finite(self, energy: bool) -> Result<Self, &'static str> {
-        if (!energy || self.1.is_finite()) && self.0.iter().flatten().all(|c| c.is_finite()) {
-            Ok(self)
-        } else {
-            Err(OVERFLOW)
-        }
+        all_finite(self.0.as_flattened(), self.1, energy).map(|()| self)
     }
 }
 
 impl Finite for ([f64; 3], f64) {
     fn finite(self, energy: bool) -> Result<Self, &'static str> {
-        if (!energy || self.1.is_finite()) && self.0.iter().all(|c| c.is_finite()) {
-            Ok(self)
-        } else {
-            Err(OVERFLOW)
-        }
+        all_finite(&self.0, self.1, energy).map(|()| self)
     }
 }
 

@@ -14,14 +14,15 @@ impl Bonded<2> for Fast {
         }
         // one division per bond; the damping's ṙ only where there is damping (not even a + 0)
         let inv = 1.0 / r;
-        let spring = k * (r - r0);
+        let stretch = r - r0;
+        let spring = k * stretch;
         let s = if gamma == 0.0 {
             spring * inv
         } else {
             (spring + gamma * (0..3).map(|c| (v[1][c] - v[0][c]) * d[c]).sum::<f64>() * inv) * inv
         };
         let a = d.map(|c| c * s);
-        Ok(([a, a.map(|c| -c)], 0.5 * k * (r - r0) * (r - r0)))
+        Ok(([a, a.map(|c| -c)], 0.5 * k * stretch * stretch))
     }
 
     fn velocity_dependent(p: &[f64]) -> bool {
