@@ -29,7 +29,7 @@ cp "$peers"/*.lmp "$work"/
 # bench/in.lj rebuilds its list every 20 steps unchecked; Lagra rebuilds when displacements
 # could have brought a pair inside the cutoff. LAMMPS again with a checked list, checked every step:
 sed 's/^neigh_modify.*/neigh_modify    delay 0 every 1 check yes/' "$work/w1.lmp" > "$work/w1check.lmp"
-rm -f "$work"/w1*.log "$out"/lj32k_*.json "$out"/shifted_* "$out"/checked_*
+rm -f "$work"/w1*.log "$out"/lj32k_*.json "$out"/shifted_* "$out"/checked_* "$out"/busy.json
 for k in $(seq "$repeats"); do
   (cd "$work" && taskset -c 0 lmp -in w1check.lmp -var n 20 -sf opt -log w1check.log.try -screen none && keep_faster w1check.log)
   (cd "$work" && taskset -c 0 lmp -in w1.lmp -var n 20 -log w1.log.try -screen none && keep_faster w1.log)
@@ -55,6 +55,14 @@ for cpus in 0 0,1; do
       done
     done
   done
+done
+echo "the second CPU's cost to the first" >&2
+# the kernel alone on CPU 0, beside a busy loop on CPU 1 (no memory traffic to speak of): what
+# any work on the second CPU costs the first on this machine, whatever that work is
+for k in $(seq "$repeats"); do
+  taskset -c 1 sh -c 'while :; do :; done' & busy=$!
+  taskset -c 0 "$lagra" run scenes/bench/lj_32k_shifted.lagra --steps 100 --json > "$out/busy.json.try" && keep_faster "$out/busy.json"
+  kill $busy; wait $busy 2>/dev/null || true
 done
 echo "summation" >&2
 taskset -c 0 "$lagra" bench summation --json > "$out/summation.json"
@@ -84,9 +92,9 @@ PY
   (cd "$work" && taskset -c 0 lmp -in same_start.lmp -var data same_start.data -var nsteps 10000 -var every 10 -log w2.log -screen none)
 fi
 
-python3 - "$out" "$work" "$drift" <<'PY' > "$out/results.md"
+python3 - "$out" "$work" "$drift" "$repeats" <<'PY' > "$out/results.md"
 import json, sys, re
-out, work, drift = sys.argv[1], sys.argv[2], sys.argv[3] == "yes"
+out, work, drift, repeats = sys.argv[1], sys.argv[2], sys.argv[3] == "yes", sys.argv[4]
 j = lambda n: json.load(open(f"{out}/{n}"))
 def lammps(log):
     t = open(f"{work}/{log}").read()
@@ -125,6 +133,11 @@ for cpus in ["0", "01"]:
         print(f"| {len(cpus)} | {steps:,} | {u['wall_s']:.2f} s | {c['wall_s']:.2f} s | {100*(c['wall_s']/u['wall_s']-1):.0f}% |")
 verdicts = "; ".join(x["line"].replace("|", "\\|") for x in c["claims"])
 print(f"\nVerdicts of the last run: {verdicts}\n")
+u, b = j("shifted_0_100.json"), j("busy.json")
+print(f"What the second CPU costs the first on this machine: the kernel alone on CPU 0 takes {u['wall_s']:.2f} s for the 100 steps, "
+      f"{b['wall_s']:.2f} s with a shell's busy loop on CPU 1 (**{100*(b['wall_s']/u['wall_s']-1):+.0f}%**, fastest of {repeats} each): "
+      + ("the two CPUs share a core or its caches, so checking beside the kernel is not free whatever the checker does.\n"
+         if b['wall_s'] > 1.03 * u['wall_s'] else "within noise: checking beside the kernel costs it little.\n"))
 m = j("summation.json")
 print(f"### Compensated summation on the 32,000-atom system ({m['start']['terms']:,} energy terms)\n")
 print("Each witness's terms are evaluated once in binary64 and added three ways; the errors are against the exact sum of the same terms (MPFR, no rounding), so they are summation error alone. `drift` is the change over the run's 100 steps.\n")
