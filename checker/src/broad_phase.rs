@@ -103,8 +103,13 @@ impl<'a> Neighbourhood<'a> {
             let from = end;
             b.grid.around(b.cells[i], |m| {
                 let (lo, hi) = (b.start[m], b.start[m + 1]);
-                // the cell's bodies after i (in increasing order: counted, not searched)
-                let after = lo + b.members[lo..hi].iter().filter(|&&j| j <= i).count();
+                // the cell's bodies after i (in increasing order): mostly all or none of them
+                let cell = &b.members[lo..hi];
+                let after = match (cell.first(), cell.last()) {
+                    (Some(&first), _) if first > i => lo,
+                    (_, Some(&last)) if last > i => lo + cell.partition_point(|&j| j <= i),
+                    _ => return,
+                };
                 if pairs.len() < end + (hi - after) {
                     pairs.resize(2 * pairs.len() + hi - after, Near { i: 0, j: 0 });
                 }
@@ -199,12 +204,10 @@ impl Grid {
     /// distinct).
     fn around(&self, c: [usize; 3], mut visit: impl FnMut(usize)) {
         let axis = |a: usize| {
-            let (k, n) = (c[a] as i64, self.n[a] as i64);
-            (k - 1..=k + 1)
-                .filter_map(
-                    move |v| if self.periodic[a] { Some(v.rem_euclid(n)) } else { (0..n).contains(&v).then_some(v) },
-                )
-                .map(|v| v as usize)
+            let (k, n, periodic) = (c[a], self.n[a], self.periodic[a]);
+            // on a periodic axis the neighbours wrap around (compared, not divided: this is hot)
+            let (below, above) = (k.checked_sub(1), Some(k + 1).filter(|&v| v < n));
+            [below.or(periodic.then(|| n - 1)), Some(k), above.or(periodic.then_some(0))].into_iter().flatten()
         };
         for i in axis(0) {
             for j in axis(1) {
