@@ -4,7 +4,7 @@
 //! and sizes compare.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use lagra_checker::broad_phase::within;
+use lagra_checker::broad_phase::{within, Foreseen, Neighbourhood};
 use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
 use lagra_checker::monitor::Monitor;
 use lagra_checker::terms::{Kind, Shape};
@@ -110,6 +110,18 @@ fn neighbour_build(c: &mut Criterion) {
     // the checker's own pair list, at the reach its energy sum asks for
     group.bench_function("checker_lj_32k", |b| {
         b.iter(|| black_box(within(black_box(&lj.x0), &lj.model.cell, Some(2.5 * (1.0 + 1e-6))).len()))
+    });
+    // the list made ahead of a checkpoint, and the checkpoint's pairs taken from it
+    let reach = 2.5 * (1.0 + 1e-6);
+    group.bench_function("checker_lj_32k_foreseen", |b| {
+        b.iter(|| black_box(Foreseen::new(black_box(&lj.x0), &lj.model.cell, reach).is_some()))
+    });
+    let ahead = [Foreseen::new(&lj.x0, &lj.model.cell, reach).expect("a grid for 32,000 atoms")];
+    group.bench_function("checker_lj_32k_from_foreseen", |b| {
+        b.iter(|| {
+            let near = Neighbourhood::new(black_box(&lj.x0), &lj.model.cell, Some(reach), &ahead);
+            black_box(near.of(0..lj.x0.len()).len())
+        })
     });
     group.finish();
 }

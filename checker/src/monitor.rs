@@ -3,6 +3,7 @@
 //! checkpoint that binary64 intervals cannot decide is re-evaluated with MPFR intervals at rising
 //! precision, up to a cap, before it is left undecided.
 
+use crate::broad_phase::{Foreseen, FORESIGHT};
 use crate::certificate::{Mark, Trail};
 use crate::claims::{Claim, ClaimKind};
 use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, Verdict, BINARY64};
@@ -10,8 +11,9 @@ use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
 use crate::outward::Outward;
-use crate::quantities::Lifted;
-use crate::terms::Kind;
+use crate::quantities::{foresee, Lifted};
+use crate::terms::{Kind, Shape};
+use std::sync::Arc;
 
 /// Unit round-off of binary64.
 const U: f64 = f64::EPSILON / 2.0;
@@ -74,6 +76,8 @@ pub struct Monitor {
     ledger: Option<Ledger>,
     /// Threads a checkpoint's pair sums run on (the verdicts are the same bits for any count).
     threads: usize,
+    /// The pair lists made ahead of the next checkpoint (`foresee`).
+    ahead: Arc<[Foreseen]>,
 }
 
 /// What the checker concluded about a run.
@@ -128,7 +132,7 @@ impl Monitor {
             .map(|claim| Track { judge: Judge::new(claim.kind), claim, marks: vec![], scale: 0.0, stopped: None })
             .collect();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads })
+        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads, ahead: Arc::default() })
     }
 
     /// Sums each checkpoint's pair terms on `n` threads (all the CPUs by default): one when
@@ -140,6 +144,21 @@ impl Monitor {
     /// The threads a checkpoint's pair sums run on.
     pub fn threads(&self) -> usize {
         self.threads
+    }
+
+    /// How many steps before a checkpoint `foresee` is worth calling (`None`: never, no pair
+    /// term has a reach).
+    pub fn foresight(&self) -> Option<u64> {
+        let listed = |t: &&crate::model::TermInstance| t.kind.spec().shape == Shape::Pairwise;
+        self.model.terms.iter().filter(listed).any(|t| t.kind.reach(&t.params).is_some()).then_some(FORESIGHT)
+    }
+
+    /// Lists, from a state `foresight()` steps before a checkpoint, the pairs that checkpoint's
+    /// pair sums will look at, so that it need not bin its bodies. The verdicts are the same
+    /// bits with or without it: a list that does not hold every pair the checkpoint needs is
+    /// not used.
+    pub fn foresee(&mut self, s: &Snapshot) {
+        self.ahead = foresee(&self.model, s).into();
     }
 
     /// The first step after `after` at which `observe` has anything to do (`u64::MAX`: none):
@@ -166,7 +185,7 @@ impl Monitor {
             }
             return Err(Halt::InvalidState(e));
         }
-        let q = Lifted::new(&self.model, s, &Outward::NAN).on_threads(self.threads);
+        let q = Lifted::new(&self.model, s, &Outward::NAN).on_threads(self.threads).foreseeing(self.ahead.clone());
         let model = &self.model;
         let first_state = self.reference.is_none();
         if first_state {

@@ -1,11 +1,12 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
-use crate::broad_phase::Neighbourhood;
+use crate::broad_phase::{Foreseen, Neighbourhood};
 use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
 use crate::real::{norm2, sub3, Real, Vec3};
 use crate::terms::{Shape, Site};
 use std::borrow::Cow;
+use std::sync::Arc;
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
@@ -18,6 +19,8 @@ pub struct Lifted<R> {
     images: Images,
     /// Threads to sum pair terms on (the bits are the same for any count).
     threads: usize,
+    /// Pair lists made ahead of this state, used where they hold (the bits are the same).
+    ahead: Arc<[Foreseen]>,
 }
 
 impl<R: Real + Send + Sync> Lifted<R> {
@@ -46,12 +49,18 @@ impl<R: Real + Send + Sync> Lifted<R> {
             cell: model.cell,
             images: Images::of(&model.cell),
             threads: 1,
+            ahead: Arc::default(),
         }
     }
 
     /// The same, summing pair terms on `n` threads.
     pub fn on_threads(self, n: usize) -> Self {
         Lifted { threads: n, ..self }
+    }
+
+    /// The same, with pair lists made ahead (`foresee`).
+    pub fn foreseeing(self, ahead: Arc<[Foreseen]>) -> Self {
+        Lifted { ahead, ..self }
     }
 
     /// Site `j` as seen from site `i`: itself, or in a periodic cell its nearest image,
@@ -97,10 +106,9 @@ impl<R: Real + Send + Sync> Lifted<R> {
                 Shape::Pairwise => {
                     // Broad phase: a pair whose nearest image is beyond the term's reach
                     // contributes exactly zero, so leaving it out is exact. The broad phase keeps
-                    // every pair within the reach (asked for with a relative margin of 1e-6 on
-                    // top), from a grid, in the double loop's order, each with its nearest image.
-                    let reach = t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6));
-                    let near = Neighbourhood::new(&self.x, &self.cell, reach);
+                    // every pair within the reach (`asked_reach`), from a grid or a list made
+                    // ahead, in the double loop's order, each with its nearest image.
+                    let near = Neighbourhood::new(&self.x, &self.cell, asked_reach(t), &self.ahead);
                     let bodies = self.x.len();
                     let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
@@ -181,6 +189,24 @@ impl<R: Real + Send + Sync> Lifted<R> {
             |n, s| model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone()),
         )
     }
+}
+
+/// The reach a pair term's broad phase is asked for: the term's, with a relative margin of
+/// 1e-6 on top (`None`: unbounded).
+fn asked_reach(t: &TermInstance) -> Option<f64> {
+    t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6))
+}
+
+/// The pair lists the pair terms with a reach will want a few steps after state `s`
+/// (`Foreseen`): one per reach, none where a grid would not be used.
+pub fn foresee(model: &Model, s: &Snapshot) -> Vec<Foreseen> {
+    let mut ahead: Vec<Foreseen> = vec![];
+    for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
+        if let Some(r) = asked_reach(t).filter(|r| ahead.iter().all(|f| f.reach() != *r)) {
+            ahead.extend(Foreseen::new(s.x, &model.cell, r));
+        }
+    }
+    ahead
 }
 
 /// Bodies whose pairs are summed alone before their sum joins the total (see `Lifted::sum`).
@@ -307,6 +333,26 @@ mod tests {
         let (lo, hi) = one.bounds();
         assert!(Float::with_val(256, lo) <= exact && exact <= Float::with_val(256, hi), "{one:?}");
         assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
+    }
+
+    /// Pair lists made a little earlier (`foresee`) change no bit of the energy, and a state
+    /// that moved too far falls back to the grid, with the same bits too.
+    #[test]
+    fn lists_made_ahead_change_no_bit() {
+        let (m, x, v) = liquid();
+        let earlier: Vec<[f64; 3]> =
+            x.iter().zip(&v).map(|(p, u)| std::array::from_fn(|a| p[a] - 0.5 * u[a])).collect();
+        let ahead: Arc<[Foreseen]> = foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v }).into();
+        assert_eq!(ahead.len(), 1);
+        let bits = |x: &[[f64; 3]], ahead: Arc<[Foreseen]>| {
+            let e =
+                Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v }, &Outward::NAN).foreseeing(ahead).energy(&m);
+            (e.bounds().0.to_bits(), e.bounds().1.to_bits())
+        };
+        assert_eq!(bits(&x, ahead.clone()), bits(&x, Arc::default()));
+        let mut far = x.clone();
+        far[7][1] += 0.4;
+        assert_eq!(bits(&far, ahead), bits(&far, Arc::default()));
     }
 
     #[test]

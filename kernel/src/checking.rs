@@ -1,7 +1,9 @@
 //! How the run hands states to the checker: inline, or on a second thread that judges checkpoint
 //! k while the kernel steps towards k + 1. Both give the same report, bit for bit: the kernel
 //! never passes checkpoint k + 1 before checkpoint k is judged, and a breach at k reports the
-//! state at k, however far the kernel got.
+//! state at k, however far the kernel got. Overlapped, the checker is also handed a state a few
+//! steps before the last checkpoint, to list that checkpoint's pairs ahead (`Monitor::foresee`):
+//! the last checkpoint is the one nothing overlaps, and the list changes no bit of its verdict.
 
 use crate::state::State;
 use lagra_checker::claims::Claim;
@@ -29,8 +31,16 @@ pub enum Checking<'s> {
     Overlapped(Overlap<'s>),
 }
 
+/// What the checker thread is handed.
+enum Handed {
+    /// A checkpoint, to judge.
+    Checkpoint(State),
+    /// A state before the last checkpoint, to list its pairs from.
+    Ahead(State),
+}
+
 pub struct Overlap<'s> {
-    states: SyncSender<State>,
+    states: SyncSender<Handed>,
     verdicts: Receiver<Result<(), Breach>>,
     /// A checkpoint handed over whose verdict has not been read.
     pending: bool,
@@ -38,6 +48,8 @@ pub struct Overlap<'s> {
     /// last step, and returns at once from any other state.
     every: Vec<u64>,
     last: u64,
+    /// The step of the state handed ahead of the last checkpoint, if any.
+    ahead: Option<u64>,
     thread: ScopedJoinHandle<'s, Monitor>,
 }
 
@@ -45,11 +57,19 @@ impl<'s> Checking<'s> {
     /// The monitor on a second thread of `scope`, judging the states due for `claims`.
     pub fn overlapped<'e>(scope: &'s Scope<'s, 'e>, mut monitor: Monitor, claims: &[Claim], last: u64) -> Self {
         let every = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
-        let (states, inbox) = sync_channel::<State>(1);
+        let ahead = monitor.foresight().and_then(|k| last.checked_sub(k));
+        let (states, inbox) = sync_channel::<Handed>(1);
         let (outbox, verdicts) = sync_channel(1);
         let cpus = monitor.threads();
         let thread = scope.spawn(move || {
-            for s in inbox {
+            for handed in inbox {
+                let s = match handed {
+                    Handed::Ahead(s) => {
+                        monitor.foresee(&s.snapshot());
+                        continue;
+                    }
+                    Handed::Checkpoint(s) => s,
+                };
                 // one thread while the kernel steps on; every CPU for the last checkpoint, which
                 // nothing else overlaps
                 monitor.set_threads(if s.step == last { cpus } else { 1 });
@@ -60,7 +80,7 @@ impl<'s> Checking<'s> {
             }
             monitor
         });
-        Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, thread })
+        Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, ahead, thread })
     }
 
     /// Shows the checker a state. Inline, the answer is about this state; overlapped, it is
@@ -68,10 +88,14 @@ impl<'s> Checking<'s> {
     pub fn show(&mut self, s: &State) -> Result<(), Breach> {
         match self {
             Checking::Inline(m) => m.observe(&s.snapshot()).map_err(|h| (h, s.clone())),
-            Checking::Overlapped(o) if s.step == 0 || o.next_due(s.step - 1) == s.step => {
+            Checking::Overlapped(o) if s.step == 0 || o.next_checkpoint(s.step - 1) == s.step => {
                 o.settle()?;
-                o.states.send(s.clone()).expect("the checker thread takes states until the run ends");
+                o.hand(Handed::Checkpoint(s.clone()));
                 o.pending = true;
+                Ok(())
+            }
+            Checking::Overlapped(o) if o.ahead == Some(s.step) => {
+                o.hand(Handed::Ahead(s.clone()));
                 Ok(())
             }
             Checking::Overlapped(_) => Ok(()),
@@ -83,7 +107,13 @@ impl<'s> Checking<'s> {
     pub fn next_due(&self, after: u64) -> u64 {
         match self {
             Checking::Inline(m) => m.next_due(after),
-            Checking::Overlapped(o) => o.next_due(after),
+            Checking::Overlapped(o) => {
+                let due = o.next_checkpoint(after);
+                match o.ahead {
+                    Some(h) if due == o.last && after < h && h < due => h,
+                    _ => due,
+                }
+            }
         }
     }
 
@@ -109,8 +139,12 @@ impl<'s> Checking<'s> {
 }
 
 impl Overlap<'_> {
-    fn next_due(&self, after: u64) -> u64 {
+    fn next_checkpoint(&self, after: u64) -> u64 {
         self.every.iter().map(|&e| next_checkpoint(e, self.last, after)).min().unwrap_or(u64::MAX)
+    }
+
+    fn hand(&self, h: Handed) {
+        self.states.send(h).expect("the checker thread takes states until the run ends");
     }
 
     fn settle(&mut self) -> Result<(), Breach> {
@@ -129,12 +163,16 @@ mod tests {
     /// 1,372 LJ atoms, energy and momentum checked every 10 steps; `tol` decides whether the
     /// energy claim breaks part-way.
     fn melt(tol: f64) -> crate::scene::Scene {
+        melt_every(tol, 10)
+    }
+
+    fn melt_every(tol: f64, every: u64) -> crate::scene::Scene {
         compile(&format!(
             "scene m {{ entity atom {{ mass: 1 }}
                lattice {{ type: atom, density: 0.8442, cells: [7, 7, 7], temperature: 1.44, seed: 3 }}
                interaction lj_shifted {{ epsilon: 1, sigma: 1, cutoff: 2.5 }}
-               @expect energy_conservation {{ tol: {tol}, every: 10 }}
-               @expect momentum_conservation {{ every: 10 }}
+               @expect energy_conservation {{ tol: {tol}, every: {every} }}
+               @expect momentum_conservation {{ every: {every} }}
                solver {{ dt: 0.005, steps: 60 }} }}"
         ))
         .unwrap()
@@ -166,6 +204,29 @@ mod tests {
     #[test]
     fn overlapped_checking_reports_what_inline_checking_does() {
         let (a, b) = both(&melt(1e-3));
+        assert!(a.stop.is_none() && a.steps == 60);
+        same(&a, &b);
+    }
+
+    /// Overlapped, the kernel also stops `FORESIGHT` steps before the last checkpoint (not
+    /// before the others) to hand the checker a state to list that checkpoint's pairs from; the
+    /// run ends as the inline one does, bit for bit.
+    #[test]
+    fn the_last_checkpoint_is_listed_ahead_and_changes_nothing() {
+        use super::Checking;
+        use lagra_checker::broad_phase::FORESIGHT;
+        use lagra_checker::monitor::Monitor;
+        let scene = melt_every(1e-3, 20);
+        std::thread::scope(|scope| {
+            let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), 60).unwrap();
+            let c = Checking::overlapped(scope, monitor, &scene.claims, 60);
+            let ahead = 60 - FORESIGHT;
+            assert!(ahead > 40);
+            let due: Vec<u64> = [0, 20, 40, ahead].map(|after| c.next_due(after)).into();
+            assert_eq!(due, [20, 40, ahead, 60]);
+            c.into_monitor();
+        });
+        let (a, b) = both(&scene);
         assert!(a.stop.is_none() && a.steps == 60);
         same(&a, &b);
     }
