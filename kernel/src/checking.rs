@@ -57,10 +57,12 @@ impl<'s> Checking<'s> {
     /// The monitor on a second thread of `scope`, judging the states due for `claims`.
     pub fn overlapped<'e>(scope: &'s Scope<'s, 'e>, mut monitor: Monitor, claims: &[Claim], last: u64) -> Self {
         let every = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
-        let ahead = monitor.foresight().and_then(|k| last.checked_sub(k));
+        let cpus = monitor.threads();
+        // the list made ahead saves the last checkpoint its grid only if another CPU builds it
+        // while the kernel steps; on one CPU it would cost the kernel what it saves and more
+        let ahead = monitor.foresight().filter(|_| cpus > 1).and_then(|k| last.checked_sub(k));
         let (states, inbox) = sync_channel::<Handed>(1);
         let (outbox, verdicts) = sync_channel(1);
-        let cpus = monitor.threads();
         let thread = scope.spawn(move || {
             for handed in inbox {
                 let s = match handed {
@@ -208,24 +210,28 @@ mod tests {
         same(&a, &b);
     }
 
-    /// Overlapped, the kernel also stops `FORESIGHT` steps before the last checkpoint (not
-    /// before the others) to hand the checker a state to list that checkpoint's pairs from; the
-    /// run ends as the inline one does, bit for bit.
+    /// Overlapped on two CPUs, the kernel also stops `FORESIGHT` steps before the last
+    /// checkpoint (not before the others) to hand the checker a state to list that checkpoint's
+    /// pairs from; on one it does not. The run ends as the inline one does, bit for bit.
     #[test]
     fn the_last_checkpoint_is_listed_ahead_and_changes_nothing() {
         use super::Checking;
         use lagra_checker::broad_phase::FORESIGHT;
         use lagra_checker::monitor::Monitor;
         let scene = melt_every(1e-3, 20);
-        std::thread::scope(|scope| {
-            let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), 60).unwrap();
-            let c = Checking::overlapped(scope, monitor, &scene.claims, 60);
-            let ahead = 60 - FORESIGHT;
-            assert!(ahead > 40);
-            let due: Vec<u64> = [0, 20, 40, ahead].map(|after| c.next_due(after)).into();
-            assert_eq!(due, [20, 40, ahead, 60]);
-            c.into_monitor();
-        });
+        let ahead = 60 - FORESIGHT;
+        assert!(ahead > 40);
+        for (cpus, stops) in [(2, vec![20, 40, ahead, 60]), (1, vec![20, 40, 60])] {
+            std::thread::scope(|scope| {
+                let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), 60).unwrap();
+                monitor.set_threads(cpus);
+                let c = Checking::overlapped(scope, monitor, &scene.claims, 60);
+                let due: Vec<u64> =
+                    std::iter::successors(Some(0), |&s| Some(c.next_due(s)).filter(|_| s < 60)).collect();
+                assert_eq!(due[1..], stops, "{cpus} CPUs");
+                c.into_monitor();
+            });
+        }
         let (a, b) = both(&scene);
         assert!(a.stop.is_none() && a.steps == 60);
         same(&a, &b);
