@@ -7,6 +7,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use lagra_checker::broad_phase::{within, Foreseen, Neighbourhood};
 use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
 use lagra_checker::monitor::Monitor;
+use lagra_checker::quantities::asked_reach;
 use lagra_checker::terms::{Kind, Shape};
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::lang::compile;
@@ -108,11 +109,12 @@ fn neighbour_build(c: &mut Criterion) {
         })
     });
     // the checker's own pair list, at the reach its energy sum asks for
+    let reach = asked_reach(&lj.model.terms[0]);
     group.bench_function("checker_lj_32k", |b| {
-        b.iter(|| black_box(within(black_box(&lj.x0), &lj.model.cell, Some(2.5 * (1.0 + 1e-6))).len()))
+        b.iter(|| black_box(within(black_box(&lj.x0), &lj.model.cell, reach).len()))
     });
     // the list made ahead of a checkpoint, and the checkpoint's pairs taken from it
-    let reach = 2.5 * (1.0 + 1e-6);
+    let reach = reach.expect("LJ has a cutoff");
     group.bench_function("checker_lj_32k_foreseen", |b| {
         b.iter(|| black_box(Foreseen::new(black_box(&lj.x0), &lj.model.cell, reach).is_some()))
     });

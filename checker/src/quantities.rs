@@ -193,7 +193,7 @@ impl<R: Real + Send + Sync> Lifted<R> {
 
 /// The reach a pair term's broad phase is asked for: the term's, with a relative margin of
 /// 1e-6 on top (`None`: unbounded).
-fn asked_reach(t: &TermInstance) -> Option<f64> {
+pub fn asked_reach(t: &TermInstance) -> Option<f64> {
     t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6))
 }
 
@@ -285,7 +285,7 @@ mod tests {
             for (a, b) in iv.angular_momentum(&m).into_iter().zip(hp.angular_momentum(&m)) { prop_assert!(inside(a, b)); }
             // and the enclosure is tight: a few ulps of the energy's scale, the sum of its parts'
             // sizes (the kinetic and the potential energies can cancel to near zero)
-            let size = |r: Outward| r.bounds().0.abs().max(r.bounds().1.abs());
+            let size = |r: Outward| r.abs().bounds().1;
             let each = m.terms.iter().map(|t| size(iv.potential(&Model { terms: vec![t.clone()], ..m.clone() })));
             let scale = 1.0 + size(iv.kinetic()) + each.sum::<f64>();
             let (lo, hi) = iv.energy(&m).bounds();
