@@ -4,9 +4,9 @@
 //! deciding what binary64 intervals cannot).
 
 use crate::mpfi::Mpfi;
-use crate::real::Real;
+use crate::quantities::PairSum;
 
-pub trait Enclosure: Real + Send + Sync {
+pub trait Enclosure: PairSum {
     fn abs(self) -> Self;
     fn max(self, o: Self) -> Self;
     /// `(lo, hi)` with lo ≤ every enclosed value ≤ hi; `(NaN, NaN)` when nothing is enclosed.

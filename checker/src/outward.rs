@@ -24,6 +24,8 @@ use crate::real::Real;
 use inari::Interval;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
+pub mod lanes;
+
 /// The reals in `[lo, hi]`; both NaN when nothing is known.
 #[derive(Clone, Copy, Debug)]
 pub struct Outward {
@@ -42,24 +44,22 @@ impl Outward {
 
     /// The reals from `lo` to `hi`, bounds already known to enclose (rounded outward or exact):
     /// `NAN` unless lo ≤ hi, lo below +∞ and hi above −∞.
+    #[inline(always)]
     pub fn from_bounds(lo: f64, hi: f64) -> Outward {
-        if lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY {
-            Outward { lo, hi }
-        } else {
-            Outward::NAN
-        }
+        Outward::either(lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY, Outward { lo, hi }, Outward::NAN)
     }
 
     /// The bounds of a correctly rounded result, stepped outward past their neighbours
     /// (`down`, `up`). The callers round monotone results of ordered operands, so lo ≤ hi unless
     /// a NaN came in; `down` never gives +∞ nor `up` −∞.
-    #[inline]
+    #[inline(always)]
     fn rounded(lo: f64, hi: f64) -> Outward {
         Outward { lo: down(lo), hi: up(hi) }
     }
 
+    #[inline(always)]
     fn is_nan(&self) -> bool {
-        self.lo.is_nan() || self.hi.is_nan()
+        self.lo.is_nan() | self.hi.is_nan()
     }
 
     /// Through inari, for the functions binary64 libraries do not round correctly.
@@ -70,48 +70,77 @@ impl Outward {
         }
     }
 
-    /// x², tight across zero (x² ≥ 0 is known, x·x would not know it).
-    #[inline]
+    /// x², tight across zero (x² ≥ 0 is known, x·x would not know it): from the square of the
+    /// point nearest zero, max(lo, −hi, 0), to the greater endpoint square.
+    #[inline(always)]
     fn sqr(self) -> Outward {
-        let (a, b) = (self.lo * self.lo, self.hi * self.hi);
-        let (lo, hi) = if self.lo >= 0.0 {
-            (a, b)
-        } else if self.hi <= 0.0 {
-            (b, a)
-        } else {
-            (0.0, a.max(b))
-        };
-        let r = Outward::rounded(lo, hi);
-        // x² ≥ 0 (and a NaN stays NaN: `max` would drop it)
-        Outward { lo: if r.lo < 0.0 { 0.0 } else { r.lo }, ..r }
+        let nearest = most(most(self.lo, -self.hi), 0.0);
+        let r = Outward::rounded(nearest * nearest, most(self.lo * self.lo, self.hi * self.hi));
+        // x² ≥ 0 (a NaN stays NaN above)
+        Outward { lo: most(r.lo, 0.0), ..r }
     }
 
     /// xᵏ: squares tight across zero, the squares and cubes the definitions use written out.
-    #[inline]
     fn power(self, k: u32) -> Outward {
-        match k {
-            0 => Outward::point(1.0),
-            1 => self,
-            2 => self.sqr(),
-            3 => self.sqr() * self,
-            k if k % 2 == 0 => self.power(k / 2).sqr(),
-            k => self.power(k - 1) * self,
-        }
+        ladder(self, k, Outward::point(1.0), &Outward::sqr)
     }
 
     /// The hull of four endpoint results, rounded outward. A NaN among them without a NaN
     /// operand is 0·∞ or ∞/∞ (or ∞ − ∞): the whole line, which is sound.
+    #[inline(always)]
     fn of_four(p: [f64; 4], operands_nan: bool) -> Outward {
-        if p.iter().any(|c| c.is_nan()) {
-            return if operands_nan { Outward::NAN } else { Outward::ENTIRE };
-        }
-        Outward::rounded(p[0].min(p[1]).min(p[2].min(p[3])), p[0].max(p[1]).max(p[2].max(p[3])))
+        let nan = p[0].is_nan() | p[1].is_nan() | p[2].is_nan() | p[3].is_nan();
+        let r = Outward::rounded(least(least(p[0], p[1]), least(p[2], p[3])), most(most(p[0], p[1]), most(p[2], p[3])));
+        let unknown = Outward::either(operands_nan, Outward::NAN, Outward::ENTIRE);
+        Outward::either(nan, unknown, r)
     }
+
+    /// `a` if `c`, else `b`: a choice of values, so that no operation branches on its operands
+    /// and several lanes of them run as one vector instruction (`Lanes`).
+    #[inline(always)]
+    fn either(c: bool, a: Outward, b: Outward) -> Outward {
+        Outward { lo: pick(c, a.lo, b.lo), hi: pick(c, a.hi, b.hi) }
+    }
+}
+
+/// xᵏ by squaring and multiplying, for one enclosure or for lanes of them (the same steps, so
+/// the same bits in each lane).
+fn ladder<T: Copy + Mul<Output = T>>(x: T, k: u32, one: T, sqr: &impl Fn(T) -> T) -> T {
+    match k {
+        0 => one,
+        1 => x,
+        2 => sqr(x),
+        3 => sqr(x) * x,
+        k if k % 2 == 0 => sqr(ladder(x, k / 2, one, sqr)),
+        k => ladder(x, k - 1, one, sqr) * x,
+    }
+}
+
+/// `a` if `c`, else `b` (a select, not a branch).
+#[inline(always)]
+fn pick(c: bool, a: f64, b: f64) -> f64 {
+    if c {
+        a
+    } else {
+        b
+    }
+}
+
+/// The lesser of `a` and `b`, and the greater, when neither is NaN (the callers set NaN cases
+/// apart).
+#[inline(always)]
+fn least(a: f64, b: f64) -> f64 {
+    pick(a < b, a, b)
+}
+
+#[inline(always)]
+fn most(a: f64, b: f64) -> f64 {
+    pick(a > b, a, b)
 }
 
 /// |r|·2⁻⁵² + 2⁻¹⁰⁷⁴, in one rounding: at least the gap from r to either neighbour (an ulp, or the
 /// least subnormal near zero).
-#[inline]
+#[inline(always)]
 fn gap(r: f64) -> f64 {
     r.abs().mul_add(f64::EPSILON, f64::from_bits(1))
 }
@@ -119,28 +148,20 @@ fn gap(r: f64) -> f64 {
 /// A binary64 value above r, a few neighbours up at most (+∞ stays, −∞ becomes −MAX): above
 /// it, so at or above succ(r), as z3 proves for every binary64 r (`checker/proofs/outward.smt2`).
 /// A few instructions and no branch, where `f64::next_up` tests for NaN, ∞, zero and sign.
-#[inline]
+#[inline(always)]
 fn up(r: f64) -> f64 {
-    if r == f64::NEG_INFINITY {
-        -f64::MAX
-    } else {
-        r + gap(r)
-    }
+    pick(r == f64::NEG_INFINITY, -f64::MAX, r + gap(r))
 }
 
 /// A binary64 value below r, a few neighbours down at most (−∞ stays, +∞ becomes MAX).
-#[inline]
+#[inline(always)]
 fn down(r: f64) -> f64 {
-    if r == f64::INFINITY {
-        f64::MAX
-    } else {
-        r - gap(r)
-    }
+    pick(r == f64::INFINITY, f64::MAX, r - gap(r))
 }
 
 impl Add for Outward {
     type Output = Outward;
-    #[inline]
+    #[inline(always)]
     fn add(self, o: Outward) -> Outward {
         Outward::rounded(self.lo + o.lo, self.hi + o.hi)
     }
@@ -148,7 +169,7 @@ impl Add for Outward {
 
 impl Sub for Outward {
     type Output = Outward;
-    #[inline]
+    #[inline(always)]
     fn sub(self, o: Outward) -> Outward {
         Outward::rounded(self.lo - o.hi, self.hi - o.lo)
     }
@@ -156,7 +177,7 @@ impl Sub for Outward {
 
 impl Neg for Outward {
     type Output = Outward;
-    #[inline]
+    #[inline(always)]
     fn neg(self) -> Outward {
         Outward { lo: -self.hi, hi: -self.lo }
     }
@@ -164,56 +185,38 @@ impl Neg for Outward {
 
 impl Mul for Outward {
     type Output = Outward;
-    #[inline]
+    #[inline(always)]
     fn mul(self, o: Outward) -> Outward {
-        if self.lo >= 0.0 && o.lo >= 0.0 {
-            // both non-negative (NaN fails the test), the common case in the definitions:
-            // the corners are ordered, unless 0·∞ (then the general case below)
-            let (lo, hi) = (self.lo * o.lo, self.hi * o.hi);
-            if !hi.is_nan() {
-                return Outward::rounded(lo, hi);
-            }
-        }
         let (a, b) = (self, o);
-        Outward::of_four([a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi], a.is_nan() || b.is_nan())
+        Outward::of_four([a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi], a.is_nan() | b.is_nan())
     }
 }
 
 impl Div for Outward {
     type Output = Outward;
-    #[inline]
+    #[inline(always)]
     fn div(self, o: Outward) -> Outward {
-        if self.is_nan() || o.is_nan() {
-            return Outward::NAN;
-        }
-        if o.lo <= 0.0 && o.hi >= 0.0 {
-            // a divisor that may be zero: nothing is known of the quotient's size
-            return Outward::ENTIRE;
-        }
         let (a, b) = (self, o);
-        if a.lo >= 0.0 && b.lo > 0.0 && b.lo < f64::INFINITY {
-            // the common case: the corners are ordered (∞/∞ cannot arise)
-            return Outward::rounded(a.lo / b.hi, a.hi / b.lo);
-        }
-        Outward::of_four([a.lo / b.lo, a.lo / b.hi, a.hi / b.lo, a.hi / b.hi], false)
+        let quotient = Outward::of_four([a.lo / b.lo, a.lo / b.hi, a.hi / b.lo, a.hi / b.hi], false);
+        // a divisor that may be zero: nothing is known of the quotient's size
+        let unknown = Outward::either(a.is_nan() | b.is_nan(), Outward::NAN, Outward::ENTIRE);
+        Outward::either(a.is_nan() | b.is_nan() | (b.lo <= 0.0 && b.hi >= 0.0), unknown, quotient)
     }
 }
 
 impl Real for Outward {
-    #[inline]
+    #[inline(always)]
     fn lift(&self, c: f64) -> Self {
         Outward::point(c)
     }
     /// √ of the non-negative part; `NAN` if there is none.
+    #[inline(always)]
     fn sqrt(self) -> Self {
-        if !(self.hi >= 0.0) {
-            return Outward::NAN;
-        }
-        let lo = if self.lo > 0.0 { down(self.lo.sqrt()).max(0.0) } else { 0.0 };
-        Outward { lo, hi: up(self.hi.sqrt()) }
+        let lo = pick(self.lo > 0.0, most(down(self.lo.sqrt()), 0.0), 0.0);
+        Outward::either(self.hi >= 0.0, Outward { lo, hi: up(self.hi.sqrt()) }, Outward::NAN)
     }
     /// By squaring and multiplying, each step rounded outward.
-    #[inline]
+    #[inline(always)]
     fn powi(self, n: i32) -> Self {
         let p = self.power(n.unsigned_abs());
         if n < 0 {
@@ -243,7 +246,7 @@ impl Real for Outward {
             Err(_) => Outward::NAN,
         }
     }
-    #[inline]
+    #[inline(always)]
     fn lt(&self, bound: &Self) -> Option<bool> {
         if self.hi < bound.lo {
             Some(true)
@@ -253,11 +256,10 @@ impl Real for Outward {
             None // straddling, or a NaN
         }
     }
+    #[inline(always)]
     fn hull(self, o: Self) -> Self {
-        if self.is_nan() || o.is_nan() {
-            return Outward::NAN;
-        }
-        Outward { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
+        let r = Outward { lo: least(self.lo, o.lo), hi: most(self.hi, o.hi) };
+        Outward::either(self.is_nan() | o.is_nan(), Outward::NAN, r)
     }
 }
 

@@ -1,10 +1,13 @@
 //! The physical quantities a claim speaks of, evaluated from the model's definitions on one
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
-use crate::broad_phase::{Foreseen, Neighbourhood};
+use crate::broad_phase::{Foreseen, Near, Neighbourhood};
 use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
+use crate::mpfi::Mpfi;
+use crate::outward::lanes::{Lanes, WIDTH};
+use crate::outward::Outward;
 use crate::real::{norm2, sub3, Real, Vec3};
-use crate::terms::{Shape, Site};
+use crate::terms::{Kind, Shape, Site};
 use std::borrow::Cow;
 use std::sync::Arc;
 
@@ -23,7 +26,7 @@ pub struct Lifted<R> {
     ahead: Arc<[Foreseen]>,
 }
 
-impl<R: Real + Send + Sync> Lifted<R> {
+impl<R: PairSum> Lifted<R> {
     pub fn new(model: &Model, s: &Snapshot, proto: &R) -> Self {
         let lift3 = |a: &[f64; 3]| a.map(|c| proto.lift(c));
         let sites = model
@@ -80,18 +83,25 @@ impl<R: Real + Send + Sync> Lifted<R> {
         }
     }
 
+    /// Pair `p`: its first site, and its second as seen from the first.
+    fn sites_of(&self, p: &Near) -> (&Site<R>, Cow<'_, Site<R>>) {
+        (&self.sites[p.i], self.seen_from(p.i, p.j))
+    }
+
     /// `acc` + Σ `term(n, sites)` over the instances `which` picks (`None` adds nothing), in an order
     /// fixed by the model and the state alone: instances in order; pairs and bonds see each
     /// other's nearest periodic image; a pair term's pairs, sorted, in chunks: those of the first
     /// `CHUNK` bodies added to the running sum, those of each later `CHUNK` bodies summed alone
     /// and then added, so the chunks can be listed and summed on `threads` threads and the bits
-    /// do not depend on how many.
+    /// do not depend on how many. `pairs(n, acc, chunk)` adds a chunk of pairs (`one_by_one`, or
+    /// a faster way to the same bits).
     fn sum<T: Clone + Send + Sync>(
         &self,
         model: &Model,
         which: impl Fn(&TermInstance) -> bool,
         (mut acc, zero, add): (T, T, impl Fn(T, T) -> T + Sync),
         term: impl Fn(usize, &[&Site<R>]) -> Option<T> + Sync,
+        pairs: impl Fn(usize, T, &[Near]) -> T + Sync,
     ) -> T {
         let fold = |acc: T, each: &mut dyn Iterator<Item = Option<T>>| each.flatten().fold(acc, &add);
         for (n, t) in model.terms.iter().enumerate().filter(|(_, t)| which(t)) {
@@ -112,8 +122,7 @@ impl<R: Real + Send + Sync> Lifted<R> {
                     let bodies = self.x.len();
                     let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
                         let start = if k == 0 { acc.clone() } else { zero.clone() };
-                        let pairs = near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies));
-                        fold(start, &mut pairs.iter().map(|p| term(n, &[&self.sites[p.i], &self.seen_from(p.i, p.j)])))
+                        pairs(n, start, &near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies)))
                     });
                     acc = sums.into_iter().reduce(&add).unwrap_or(acc);
                 }
@@ -122,17 +131,32 @@ impl<R: Real + Send + Sync> Lifted<R> {
         acc
     }
 
+    /// `pairs` for `sum`: `term` at each pair in turn, added to the running sum.
+    fn one_by_one<'s, T: 's>(
+        &'s self,
+        term: &'s (impl Fn(usize, &[&Site<R>]) -> Option<T> + Sync),
+        add: impl Fn(T, T) -> T + Sync + 's,
+    ) -> impl Fn(usize, T, &[Near]) -> T + Sync + 's {
+        move |n, acc, pairs| {
+            pairs.iter().map(|p| self.sites_of(p)).filter_map(|(a, b)| term(n, &[a, &b])).fold(acc, &add)
+        }
+    }
+
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
         self.sites.iter().fold(self.zero.clone(), |acc, s| acc + half.clone() * s.m.clone() * norm2(&s.v))
     }
 
     pub fn potential(&self, model: &Model) -> R {
+        let potentials = |n: usize, acc, pairs: &[Near]| {
+            R::add_potentials(acc, model.terms[n].kind, &self.params[n], pairs.iter().map(|p| self.sites_of(p)))
+        };
         self.sum(
             model,
             |_| true,
             (self.zero.clone(), self.zero.clone(), R::add),
             |n, s| Some(model.terms[n].kind.potential(&self.params[n], s)),
+            potentials,
         )
     }
 
@@ -144,11 +168,13 @@ impl<R: Real + Send + Sync> Lifted<R> {
     /// The rate 2·ΣF at which the dissipative terms remove energy, and which terms do.
     pub fn dissipated_power(&self, model: &Model) -> R {
         // only the instances that can dissipate: a conservative term is never visited
+        let term = |n: usize, s: &[&Site<R>]| model.terms[n].kind.power(&self.params[n], s);
         self.sum(
             model,
             |t| t.dissipates(),
             (self.zero.clone(), self.zero.clone(), R::add),
-            |n, s| model.terms[n].kind.power(&self.params[n], s),
+            term,
+            self.one_by_one(&term, R::add),
         )
     }
 
@@ -182,12 +208,63 @@ impl<R: Real + Send + Sync> Lifted<R> {
     fn with_shares(&self, model: &Model, charge: Vec3<R>, which: usize) -> Vec3<R> {
         let add = |[a0, a1, a2]: Vec3<R>, [b0, b1, b2]: Vec3<R>| [a0 + b0, a1 + b1, a2 + b2];
         let zero = std::array::from_fn(|_| self.zero.clone());
-        self.sum(
-            model,
-            |t| t.kind.has_charge_share(),
-            (charge, zero, add),
-            |n, s| model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone()),
-        )
+        let term = |n: usize, s: &[&Site<R>]| {
+            model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone())
+        };
+        self.sum(model, |t| t.kind.has_charge_share(), (charge, zero, add), term, self.one_by_one(&term, add))
+    }
+}
+
+/// How a pair term's potentials at many pairs are added up: one pair after another, or, for
+/// `Outward`, four pairs at a time in `Lanes`, which gives each pair the same bits.
+pub trait PairSum: Real + Send + Sync {
+    /// `acc` + the potential of `kind` (parameters `p`) at each pair, in order.
+    fn add_potentials<'a>(
+        acc: Self,
+        kind: Kind,
+        p: &[Self],
+        pairs: impl Iterator<Item = (&'a Site<Self>, Cow<'a, Site<Self>>)>,
+    ) -> Self
+    where
+        Self: 'a,
+    {
+        pairs.fold(acc, |acc, (a, b)| acc + kind.potential(p, &[a, &b]))
+    }
+}
+
+impl PairSum for f64 {}
+#[cfg(test)]
+impl PairSum for rug::Float {}
+impl PairSum for Mpfi {}
+
+impl PairSum for Outward {
+    fn add_potentials<'a>(
+        mut acc: Self,
+        kind: Kind,
+        p: &[Self],
+        mut pairs: impl Iterator<Item = (&'a Site<Self>, Cow<'a, Site<Self>>)>,
+    ) -> Self {
+        let wide: Vec<Lanes> = p.iter().map(|c| Lanes::of([*c; WIDTH])).collect();
+        let (reads, mut sites) = (kind.reads(), [Site::filled(Outward::NAN), Site::filled(Outward::NAN)]);
+        loop {
+            let mut n = 0;
+            for (a, b) in pairs.by_ref().take(WIDTH) {
+                sites[0].put(n, a, reads);
+                sites[1].put(n, &b, reads);
+                n += 1;
+            }
+            if n == 0 {
+                return acc;
+            }
+            // the lanes of a short last group keep the sites of the group before (or NaN), and
+            // are dropped
+            for e in &kind.potential(&wide, &[&sites[0], &sites[1]]).lanes()[..n] {
+                acc = acc + *e;
+            }
+            if n < WIDTH {
+                return acc;
+            }
+        }
     }
 }
 

@@ -19,6 +19,15 @@ pub struct Site<R> {
     pub colour: [R; 2],
 }
 
+/// Which fields of a site besides its position a potential reads (`Kind::reads`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reads {
+    pub v: bool,
+    pub m: bool,
+    pub q: bool,
+    pub colour: bool,
+}
+
 /// Which bodies a term acts on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shape {
@@ -208,15 +217,8 @@ impl Kind {
     /// shares of the momentum and angular momentum.
     fn dimensions(self) -> [Option<Dimension>; 6] {
         let spec = self.spec();
-        let p: Vec<Dimension> =
-            spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect();
-        let site = Site {
-            x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
-            v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
-            m: Dimension::of(Dim::MASS),
-            q: Dimension::of(Dim::CHARGE),
-            colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
-        };
+        let p = Kind::parameter_dimensions(spec);
+        let site = Kind::site_dimensions();
         let s = vec![&site; spec.shape.arity()];
         // a vector is homogeneous when its components are alike: their sum says so
         let sum = |v: Vec3<Dimension>| {
@@ -233,6 +235,44 @@ impl Kind {
             momentum,
             angular,
         ]
+    }
+
+    fn parameter_dimensions(spec: &Spec) -> Vec<Dimension> {
+        spec.params.iter().flat_map(|p| std::iter::repeat_n(Dimension::of(p.dim), p.len)).collect()
+    }
+
+    fn site_dimensions() -> Site<Dimension> {
+        Site {
+            x: std::array::from_fn(|_| Dimension::of(Dim::LENGTH)),
+            v: std::array::from_fn(|_| Dimension::of(Dim::VELOCITY)),
+            m: Dimension::of(Dim::MASS),
+            q: Dimension::of(Dim::CHARGE),
+            colour: std::array::from_fn(|_| Dimension::of(Dim::NONE)),
+        }
+    }
+
+    /// Which fields of its sites besides the positions the potential reads (worked out once per
+    /// kind): a field is read when an error put in its place reaches the potential's dimension
+    /// (every operation on dimensions passes an error on, and both branches of a cutoff are
+    /// taken). The checker leaves the other fields unknown where it evaluates pairs in lanes.
+    pub fn reads(self) -> Reads {
+        static TABLE: OnceLock<Vec<Reads>> = OnceLock::new();
+        let read = |k: Kind, poison: fn(&mut Site<Dimension>, Dimension)| {
+            let mut site = Kind::site_dimensions();
+            poison(&mut site, Dimension(Err("read".into())));
+            k.potential(&Kind::parameter_dimensions(k.spec()), &vec![&site; k.spec().shape.arity()]).0.is_err()
+        };
+        TABLE.get_or_init(|| {
+            Kind::ALL
+                .iter()
+                .map(|&k| Reads {
+                    v: read(k, |s, e| s.v = [e.clone(), e.clone(), e]),
+                    m: read(k, |s, e| s.m = e),
+                    q: read(k, |s, e| s.q = e),
+                    colour: read(k, |s, e| s.colour = [e.clone(), e]),
+                })
+                .collect()
+        })[self as usize]
     }
 
     /// Whether the definition has a share of the momenta (worked out once per kind).
@@ -296,6 +336,17 @@ mod tests {
         for k in Kind::ALL {
             assert_eq!(k.check_dimensions(), Ok(()));
         }
+    }
+
+    #[test]
+    fn potentials_read_what_they_use() {
+        let reading = |f: fn(Reads) -> bool| Kind::ALL.iter().copied().filter(|k| f(k.reads())).collect::<Vec<_>>();
+        // drag and the magnetic field write their zero potential as m v² · 0, for its dimension
+        assert_eq!(reading(|r| r.v), [Kind::Drag, Kind::MagneticField]);
+        let massive = [Kind::Gravity, Kind::UniformAcceleration, Kind::GravityWell, Kind::Drag, Kind::MagneticField];
+        assert_eq!(reading(|r| r.m), massive);
+        assert_eq!(reading(|r| r.q), [Kind::Coulomb, Kind::CoulombReactionField, Kind::Yukawa, Kind::ElectricField]);
+        assert_eq!(reading(|r| r.colour), [Kind::QcdCoulomb]);
     }
 
     #[test]

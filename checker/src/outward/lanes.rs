@@ -1,0 +1,207 @@
+//! Four enclosures side by side: a term's definition evaluated at four pairs at once.
+//!
+//! Why it is sound: every operation on `Lanes` is the `Outward` operation applied to each lane
+//! (`zip`, `map`), so lane k holds exactly the bits one `Outward` evaluation at pair k gives.
+//! `Outward`'s operations choose values rather than branch on them, so the four copies become
+//! vector instructions. The one place the lanes can disagree is a comparison (`lt`, the
+//! cutoff): when they do, `lt` says "undecided" and keeps each lane's answer for the `hull`
+//! that `select` then takes, which gives each lane what `select` would have given it alone.
+
+use super::Outward;
+use crate::real::Real;
+use crate::terms::{Reads, Site};
+use std::array::from_fn;
+use std::cell::RefCell;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+pub const WIDTH: usize = 4;
+
+#[derive(Clone, Copy, Debug)]
+pub struct Lanes {
+    lo: [f64; WIDTH],
+    hi: [f64; WIDTH],
+}
+
+impl Lanes {
+    #[inline(always)]
+    pub fn of(each: [Outward; WIDTH]) -> Lanes {
+        Lanes { lo: each.map(|o| o.lo), hi: each.map(|o| o.hi) }
+    }
+
+    #[inline(always)]
+    pub fn lanes(self) -> [Outward; WIDTH] {
+        from_fn(|k| self.lane(k))
+    }
+
+    #[inline(always)]
+    fn lane(&self, k: usize) -> Outward {
+        Outward { lo: self.lo[k], hi: self.hi[k] }
+    }
+
+    #[inline(always)]
+    fn map(self, f: impl Fn(Outward) -> Outward) -> Lanes {
+        self.zip(self, |a, _| f(a))
+    }
+
+    /// `f` lane by lane: written as a loop over arrays (not through `lanes` and `of`) so that the
+    /// compiler sees four copies of one straight-line code and makes them vector instructions.
+    #[inline(always)]
+    fn zip(self, o: Lanes, f: impl Fn(Outward, Outward) -> Outward) -> Lanes {
+        let mut r = self;
+        for k in 0..WIDTH {
+            let v = f(self.lane(k), o.lane(k));
+            (r.lo[k], r.hi[k]) = (v.lo, v.hi);
+        }
+        r
+    }
+}
+
+impl Site<Lanes> {
+    /// Sites with every field `[c, c]` in every lane.
+    pub fn filled(c: Outward) -> Site<Lanes> {
+        let l = Lanes::of([c; WIDTH]);
+        Site { x: [l; 3], v: [l; 3], m: l, q: l, colour: [l; 2] }
+    }
+
+    /// Site `s` into lane `k`: its position and the fields in `reads` (the others are left as
+    /// they are: filled with NaN, a definition that read them would know nothing).
+    #[inline(always)]
+    pub fn put(&mut self, k: usize, s: &Site<Outward>, reads: Reads) {
+        let set = |l: &mut Lanes, o: &Outward| (l.lo[k], l.hi[k]) = (o.lo, o.hi);
+        self.x.iter_mut().zip(&s.x).for_each(|(l, o)| set(l, o));
+        if reads.v {
+            self.v.iter_mut().zip(&s.v).for_each(|(l, o)| set(l, o));
+        }
+        if reads.m {
+            set(&mut self.m, &s.m);
+        }
+        if reads.q {
+            set(&mut self.q, &s.q);
+        }
+        if reads.colour {
+            self.colour.iter_mut().zip(&s.colour).for_each(|(l, o)| set(l, o));
+        }
+    }
+}
+
+macro_rules! lane_wise {
+    ($($op:ident $f:ident),*) => {
+        $(impl $op for Lanes {
+            type Output = Lanes;
+            #[inline(always)]
+            fn $f(self, o: Lanes) -> Lanes {
+                self.zip(o, Outward::$f)
+            }
+        })*
+    };
+}
+lane_wise!(Add add, Sub sub, Mul mul, Div div);
+
+impl Neg for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn neg(self) -> Lanes {
+        self.map(Outward::neg)
+    }
+}
+
+/// The `Real` functions of one argument, lane by lane.
+macro_rules! each_lane {
+    ($($f:ident),*) => {
+        $(fn $f(self) -> Self {
+            self.map(Outward::$f)
+        })*
+    };
+}
+
+thread_local! {
+    /// Each lane's answer to the comparisons the lanes disagreed on, latest last.
+    static UNDECIDED: RefCell<Vec<[Option<bool>; WIDTH]>> = const { RefCell::new(Vec::new()) };
+}
+
+impl Real for Lanes {
+    #[inline(always)]
+    fn lift(&self, c: f64) -> Self {
+        Lanes::of([Outward::point(c); WIDTH])
+    }
+    each_lane!(sqrt, exp, ln, acos, cos, sin);
+    #[inline(always)]
+    fn powi(self, n: i32) -> Self {
+        // the steps of `Outward::powi`, on all lanes at once
+        let p = super::ladder(self, n.unsigned_abs(), self.lift(1.0), &|x: Lanes| x.map(Outward::sqr));
+        if n < 0 {
+            self.lift(1.0) / p
+        } else {
+            p
+        }
+    }
+    fn atan2(self, x: Self) -> Self {
+        self.zip(x, Outward::atan2)
+    }
+    /// The lanes' common answer; if they differ (or none is decided), "undecided", each lane's
+    /// answer kept for the `hull` that follows.
+    #[inline(always)]
+    fn lt(&self, bound: &Self) -> Option<bool> {
+        let (a, b) = (self.lanes(), bound.lanes());
+        let each: [Option<bool>; WIDTH] = from_fn(|k| a[k].lt(&b[k]));
+        if each[0].is_some() && each.iter().all(|c| *c == each[0]) {
+            return each[0];
+        }
+        UNDECIDED.with(|u| u.borrow_mut().push(each));
+        None
+    }
+    /// Lane by lane, what `select` gives one enclosure: `self` (the "yes") where the lane's
+    /// comparison held, `o` where it did not, their hull where it was undecided.
+    fn hull(self, o: Self) -> Self {
+        let each = UNDECIDED.with(|u| u.borrow_mut().pop()).expect("hull follows an undecided lt");
+        let (yes, no) = (self.lanes(), o.lanes());
+        Lanes::of(from_fn(|k| crate::real::select(each[k], || yes[k], || no[k])))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terms::Kind;
+    use proptest::prelude::*;
+
+    fn bits(o: Outward) -> (u64, u64) {
+        (o.lo.to_bits(), o.hi.to_bits())
+    }
+
+    fn site(x: [f64; 3], q: f64) -> Site<Outward> {
+        let p = Outward::point;
+        Site { x: x.map(p), v: [p(0.5), p(-1.0), p(2.0)], m: p(1.5), q: p(q), colour: [p(0.25), p(-0.5)] }
+    }
+
+    proptest! {
+        /// Every pair term's potential at four pairs in lanes is, lane by lane, the same bits
+        /// as at each pair alone: pairs within and beyond the cutoff, and at it, mixed.
+        #[test]
+        fn lanes_give_each_pair_its_own_bits(
+            d in prop::array::uniform4(prop::array::uniform3(prop_oneof![-3.0f64..3.0, Just(0.0), Just(2.5)])),
+            q in prop::array::uniform4(-2.0f64..2.0),
+            at_zero in any::<bool>(),
+        ) {
+            // from the origin, a pair 2.5 apart straddles a 2.5 cutoff once rounded: undecided
+            let origin = site(if at_zero { [0.0; 3] } else { [0.1, -0.2, 0.3] }, 1.0);
+            let others: Vec<Site<Outward>> = (0..WIDTH).map(|k| site(d[k], q[k])).collect();
+            for kind in Kind::ALL.iter().filter(|k| k.spec().shape == crate::terms::Shape::Pairwise) {
+                let params: Vec<Outward> =
+                    (0..kind.spec().width()).map(|k| Outward::point([1.0, 1.2, 2.5, 0.7][k % 4])).collect();
+                let wide: Vec<Lanes> = params.iter().map(|p| Lanes::of([*p; WIDTH])).collect();
+                let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
+                for (k, other) in others.iter().enumerate() {
+                    sites[0].put(k, &origin, kind.reads());
+                    sites[1].put(k, other, kind.reads());
+                }
+                let at = kind.potential(&wide, &[&sites[0], &sites[1]]);
+                for (k, lane) in at.lanes().into_iter().enumerate() {
+                    let alone = kind.potential(&params, &[&origin, &others[k]]);
+                    prop_assert_eq!(bits(lane), bits(alone), "{:?}, lane {}", kind, k);
+                }
+                prop_assert!(UNDECIDED.with(|u| u.borrow().is_empty()));
+            }
+        }
+    }
+}
