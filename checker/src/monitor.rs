@@ -11,8 +11,8 @@ use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
 use crate::outward::Outward;
-use crate::quantities::{foresee, Lifted};
-use crate::terms::{Kind, Shape};
+use crate::quantities::{foresee, pair_reaches, Lifted};
+use crate::terms::Kind;
 use std::sync::Arc;
 
 /// Unit round-off of binary64.
@@ -149,8 +149,7 @@ impl Monitor {
     /// How many steps before a checkpoint `foresee` is worth calling (`None`: never, no pair
     /// term has a reach).
     pub fn foresight(&self) -> Option<u64> {
-        let listed = |t: &&crate::model::TermInstance| t.kind.spec().shape == Shape::Pairwise;
-        self.model.terms.iter().filter(listed).any(|t| t.kind.reach(&t.params).is_some()).then_some(FORESIGHT)
+        (!pair_reaches(&self.model).is_empty()).then_some(FORESIGHT)
     }
 
     /// Lists, from a state `foresight()` steps before a checkpoint, the pairs that checkpoint's

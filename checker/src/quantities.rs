@@ -274,16 +274,22 @@ pub fn asked_reach(t: &TermInstance) -> Option<f64> {
     t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6))
 }
 
+/// The distinct reaches the model's pair terms ask their broad phase for (`asked_reach`; a pair
+/// term without one is summed over every pair and needs no list).
+pub fn pair_reaches(model: &Model) -> Vec<f64> {
+    let mut reaches: Vec<f64> = vec![];
+    for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
+        if let Some(r) = asked_reach(t).filter(|r| !reaches.contains(r)) {
+            reaches.push(r);
+        }
+    }
+    reaches
+}
+
 /// The pair lists the pair terms with a reach will want a few steps after state `s`
 /// (`Foreseen`): one per reach, none where a grid would not be used.
 pub fn foresee(model: &Model, s: &Snapshot) -> Vec<Foreseen> {
-    let mut ahead: Vec<Foreseen> = vec![];
-    for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
-        if let Some(r) = asked_reach(t).filter(|r| ahead.iter().all(|f| f.reach() != *r)) {
-            ahead.extend(Foreseen::new(s.x, &model.cell, r));
-        }
-    }
-    ahead
+    pair_reaches(model).into_iter().filter_map(|r| Foreseen::new(s.x, &model.cell, r)).collect()
 }
 
 /// Bodies whose pairs are summed alone before their sum joins the total (see `Lifted::sum`).
