@@ -418,6 +418,23 @@ mod tests {
         assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
     }
 
+    /// Four pairs at a time (`PairSum` for `Outward`) adds up the same bits as one pair after
+    /// another, whatever the number of pairs is modulo four.
+    #[test]
+    fn pairs_in_lanes_add_up_to_the_same_bits() {
+        let (m, x, v) = liquid();
+        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Outward::NAN);
+        let (t, p) = (&m.terms[0], &q.params[0]);
+        let pairs = crate::broad_phase::within(&x, &m.cell, asked_reach(t));
+        let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
+        for n in [0, 1, 2, 3, 4, 5, 7, 4001, pairs.len()] {
+            let each = || pairs[..n].iter().map(|p| q.sites_of(p));
+            let start = Outward::point(-1.5);
+            let alone = each().fold(start, |acc, (a, b)| acc + t.kind.potential(p, &[a, &b]));
+            assert_eq!(bits(Outward::add_potentials(start, t.kind, p, each())), bits(alone), "{n} pairs");
+        }
+    }
+
     /// Pair lists made a little earlier (`foresee`) change no bit of the energy, and a state
     /// that moved too far falls back to the grid, with the same bits too.
     #[test]
