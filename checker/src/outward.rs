@@ -128,7 +128,8 @@ fn pick(c: bool, a: f64, b: f64) -> f64 {
     }
 }
 
-/// The lesser of `a` and `b`, and the greater, when neither is NaN (the callers set NaN cases
+/// The lesser of `a` and `b`, and the greater; `b` when either is NaN (a maximum with 0 thus
+/// drops a NaN: `sqr` and `sqrt` rely on that for a lower end, the other callers set NaN cases
 /// apart).
 #[inline(always)]
 fn least(a: f64, b: f64) -> f64 {
@@ -201,8 +202,9 @@ impl Div for Outward {
         let (a, b) = (self, o);
         let quotient = Outward::of_four([a.lo / b.lo, a.lo / b.hi, a.hi / b.lo, a.hi / b.hi], false);
         // a divisor that may be zero: nothing is known of the quotient's size
-        let unknown = Outward::either(a.is_nan() | b.is_nan(), Outward::NAN, Outward::ENTIRE);
-        Outward::either(a.is_nan() | b.is_nan() | (b.lo <= 0.0 && b.hi >= 0.0), unknown, quotient)
+        let nan = a.is_nan() | b.is_nan();
+        let unknown = Outward::either(nan, Outward::NAN, Outward::ENTIRE);
+        Outward::either(nan | (b.lo <= 0.0 && b.hi >= 0.0), unknown, quotient)
     }
 }
 
