@@ -5,8 +5,9 @@
 ;    so with nothing in between, succ(RN(x)) ≥ RU(x) ≥ x and pred(RN(x)) ≤ RD(x) ≤ x, overflow
 ;    to ±∞ included. √ is left to the tests: z3 did not settle it within ten minutes here (its
 ;    enclosure is tested against MPFR, rounded both ways).
-; 2. `up(r) = r + fma(|r|, 2⁻⁵², 2⁻¹⁰⁷⁴)` is above every finite r, so at or above succ(r), and
-;    leaves +∞ as it is; `down` likewise below (the code maps −∞ up to −MAX and +∞ down to
+; 2. `up(r) = r + max(|r|·2⁻⁵², 2⁻¹⁰²²)` (the max a compare-and-choose, as in the Rust: `most`)
+;    is above every finite r, so at or above succ(r), and leaves +∞ as it is; `down` likewise
+;    below (the code maps −∞ up to −MAX and +∞ down to
 ;    MAX, the neighbours, by a test). With 1, up(RN(x)) ≥ x ≥ down(RN(x)).
 ; Run: z3 checker/proofs/outward.smt2 (expect twelve `unsat`; about a minute).
 (set-logic QF_FP)
@@ -23,9 +24,11 @@
 (push) (assert (and (fp.lt (fp.div RTN a b) f) (fp.lt f (fp.div RNE a b)))) (check-sat) (pop)
 (declare-const r Float64)
 (define-fun ulp1 () Float64 (fp #b0 #b01111001011 #x0000000000000)) ; 2^-52
-(define-fun tiny () Float64 (fp #b0 #b00000000000 #x0000000000001)) ; 2^-1074
-(define-fun up () Float64 (fp.add RNE r (fp.fma RNE (fp.abs r) ulp1 tiny)))
-(define-fun down () Float64 (fp.sub RNE r (fp.fma RNE (fp.abs r) ulp1 tiny)))
+(define-fun least-normal () Float64 (fp #b0 #b00000000001 #x0000000000000)) ; 2^-1022
+(define-fun scaled () Float64 (fp.mul RNE (fp.abs r) ulp1))
+(define-fun gap () Float64 (ite (fp.gt scaled least-normal) scaled least-normal))
+(define-fun up () Float64 (fp.add RNE r gap))
+(define-fun down () Float64 (fp.sub RNE r gap))
 (push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.gt up r)))) (check-sat) (pop)
 (push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.lt down r)))) (check-sat) (pop)
 (push) (assert (and (fp.isInfinite r) (fp.isPositive r) (not (fp.eq up r)))) (check-sat) (pop)
