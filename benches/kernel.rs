@@ -79,7 +79,13 @@ fn forces(c: &mut Criterion) {
     let n = bodies.len();
     group.throughput(Throughput::Elements(n as u64));
     for &kind in Kind::ALL {
-        let model = Model { units: UnitSystem::Reduced, cell: None, bodies: bodies.clone(), terms: instance(kind, n) };
+        let model = Model {
+            units: UnitSystem::Reduced,
+            cell: None,
+            bodies: bodies.clone(),
+            terms: instance(kind, n),
+            constraints: vec![],
+        };
         let graph = LagrangianGraph::new(&model);
         let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n] };
         let mut f = vec![[0.0; 3]; n];

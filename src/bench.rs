@@ -1,7 +1,8 @@
-//! `lagra bench precision`: run time against error. Every integrator at a ladder of time steps
-//! on problems with a known answer — the harmonic oscillator (closed form), Kepler orbits at
-//! e = 0.5 and 0.9 (back where they started after whole periods) and the LJ liquid (energy
-//! drift) — written as a CSV, a log-log plot (one line per integrator) and the fitted orders.
+//! `lagra bench precision`: run time against error. Every integrator that applies at a ladder of
+//! time steps on problems with a known answer — the harmonic oscillator (closed form), Kepler
+//! orbits at e = 0.5 and 0.9 (back where they started after whole periods), the LJ liquid
+//! (energy drift), a charge in a magnetic field and a rigid rotor (circles) — written as a CSV,
+//! a log-log plot (one line per integrator) and the fitted orders.
 
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::lang::compile;
@@ -12,6 +13,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
+use Integrator::*;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -55,7 +57,9 @@ enum Study {
     },
 }
 
-/// One problem: a scene, how long to run it, the time steps to try, and its error measure.
+/// One problem: a scene, how long to run it, the time steps to try, its error measure, the
+/// integrators that apply, and the time an action window spans (a fraction of the fastest
+/// period: the descent contracts by about (ω·window)² a round).
 struct Problem {
     name: &'static str,
     scene: String,
@@ -63,7 +67,12 @@ struct Problem {
     dts: Vec<f64>,
     error: fn(&State, &State, &Energy) -> f64,
     what: &'static str,
+    integrators: &'static [Integrator],
+    window: f64,
 }
+
+/// The integrators for conservative point masses (Boris and RATTLE are Verlet there).
+const CONSERVATIVE: &[Integrator] = &[VelocityVerlet, SymplecticEuler, Yoshida4, Rk4, ActionDescent];
 
 /// The total energy at the start and at the end of a run (f64 witnesses).
 struct Energy {
@@ -94,6 +103,24 @@ fn kepler(e: f64) -> String {
     )
 }
 
+/// A charge (q = m = 1) in B = 2ẑ on a circle of radius ½ about the origin (ω = 2).
+const CYCLOTRON: &str = "scene c {
+  entity { position: [0.5, 0, 0], velocity: [0, -1, 0], mass: 1, charge: 1 }
+  magnetic { B: [0, 0, 2] }
+  solver { dt: 0.01 } }";
+
+/// Two unit masses held 1 apart by a rod, spinning at ω = 2 about their centre.
+const ROTOR: &str = "scene r {
+  entity { position: [-0.5, 0, 0], velocity: [0, -1, 0], mass: 1 }
+  entity { position: [0.5, 0, 0], velocity: [0, 1, 0], mass: 1 }
+  constraint [0, 1] { length: 1 }
+  solver { dt: 0.01 } }";
+
+/// How far a body is from the point at angle ±2t on the circle of radius ½ it started on.
+fn off_circle(s: &State, body: usize, sense: f64) -> f64 {
+    distance(s.x[body], [0.5 * (2.0 * s.t).cos(), sense * 0.5 * (2.0 * s.t).sin(), 0.0])
+}
+
 fn separation(s: &State) -> [f64; 3] {
     std::array::from_fn(|c| s.x[1][c] - s.x[0][c])
 }
@@ -116,6 +143,8 @@ fn problems(quick: bool) -> Vec<Problem> {
             dts: ladder(0.2, n),
             error: |_, s, _| (distance(s.x[0], s.x[1]) - (2.0 + 0.7 * (2.0 * s.t).cos())).abs(),
             what: "error of r(t) against the closed form at t = 10",
+            integrators: CONSERVATIVE,
+            window: 0.1,
         },
         Problem {
             name: "kepler_e0.5",
@@ -124,6 +153,8 @@ fn problems(quick: bool) -> Vec<Problem> {
             dts: ladder(0.02, n),
             error: |s0, s, _| distance(separation(s), separation(s0)),
             what: "distance from the start after 10 periods (phase and period error)",
+            integrators: CONSERVATIVE,
+            window: 0.02,
         },
         Problem {
             name: "kepler_e0.9",
@@ -132,6 +163,8 @@ fn problems(quick: bool) -> Vec<Problem> {
             dts: ladder(0.004, n),
             error: |s0, s, _| distance(separation(s), separation(s0)),
             what: "distance from the start after 10 periods (phase and period error)",
+            integrators: CONSERVATIVE,
+            window: 0.004,
         },
         Problem {
             name: "lj_liquid",
@@ -140,6 +173,28 @@ fn problems(quick: bool) -> Vec<Problem> {
             dts: ladder(0.01, if quick { 2 } else { 4 }),
             error: |_, _, e| ((e.end - e.start) / e.start).abs(),
             what: "relative energy error at t = 5 (256 atoms)",
+            integrators: CONSERVATIVE,
+            window: 0.04,
+        },
+        Problem {
+            name: "cyclotron",
+            scene: CYCLOTRON.into(),
+            t_end: 10.0,
+            dts: ladder(0.2, n),
+            error: |_, s, _| off_circle(s, 0, -1.0),
+            what: "distance from the exact circle at t = 10 (charge in B)",
+            integrators: &[VelocityVerlet, Boris, Yoshida4, Rk4],
+            window: 0.0,
+        },
+        Problem {
+            name: "rigid_rotor",
+            scene: ROTOR.into(),
+            t_end: 10.0,
+            dts: ladder(0.2, n),
+            error: |_, s, _| off_circle(s, 1, 1.0),
+            what: "distance from the exact circle at t = 10 (two bodies on a rod)",
+            integrators: &[Rattle],
+            window: 0.0,
         },
     ]
 }
@@ -162,8 +217,10 @@ fn measure(p: &Problem, integrator: Integrator, nominal: f64) -> Result<Row, Str
     let mut s = s0.clone();
     let steps = (p.t_end / nominal).ceil() as u64;
     let dt = p.t_end / steps as f64;
+    let mut settings = integrator.defaults();
+    settings.window = ((p.window / dt).floor() as u32).max(1);
     let start = Instant::now();
-    let mut stepper = Stepper::new(integrator, &graph, &s).map_err(|e| e.to_string())?;
+    let mut stepper = Stepper::new(integrator, settings, &graph, &s).map_err(|e| e.to_string())?;
     let e0 = kinetic(&s, &graph.masses) + stepper.potential();
     for _ in 0..steps {
         stepper.step(&graph, &mut s, dt).map_err(|e| format!("{} {} dt {dt}: {e}", p.name, integrator.name()))?;
@@ -188,10 +245,10 @@ fn order(rows: &[&Row]) -> Option<f64> {
 }
 
 fn plot(path: &PathBuf, problems: &[Problem], rows: &[Row]) -> Result<(), String> {
-    let root = SVGBackend::new(path, (1100, 900)).into_drawing_area();
+    let root = SVGBackend::new(path, (1100, 1350)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let colours = [RED, BLUE, BLACK];
-    for (area, p) in root.split_evenly((2, 2)).iter().zip(problems) {
+    let colours = [RED, BLUE, BLACK, GREEN, MAGENTA, CYAN, RGBColor(230, 140, 0)];
+    for (area, p) in root.split_evenly((3, 2)).iter().zip(problems) {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.problem == p.name && r.error > 0.0).collect();
         let bounds = |f: fn(&Row) -> f64| {
             mine.iter().map(|r| f(r)).fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)))
@@ -212,7 +269,8 @@ fn plot(path: &PathBuf, problems: &[Problem], rows: &[Row]) -> Result<(), String
             .x_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(|e| e.to_string())?;
-        for (integrator, colour) in Integrator::ALL.into_iter().zip(colours) {
+        for (integrator, colour) in Integrator::ALL.into_iter().zip(colours).filter(|(i, _)| p.integrators.contains(i))
+        {
             let pts: Vec<(f64, f64)> = mine
                 .iter()
                 .filter(|r| r.integrator == integrator)
@@ -264,7 +322,7 @@ fn precision(out: &PathBuf, quick: bool) -> Result<String, String> {
     let problems = problems(quick);
     let mut rows = vec![];
     for p in &problems {
-        for integrator in Integrator::ALL {
+        for &integrator in p.integrators {
             for &dt in &p.dts {
                 eprint!("\r{:<12} {:<16} dt {dt:<10}", p.name, integrator.name());
                 rows.push(measure(p, integrator, dt)?);
@@ -282,8 +340,13 @@ fn precision(out: &PathBuf, quick: bool) -> Result<String, String> {
     };
     write("precision.csv", &csv)?;
     plot(&out.join("precision.svg"), &problems, &rows)?;
-    let mut md =
-        String::from("| problem | error measure | velocity_verlet | yoshida4 | rk4 |\n|---|---|---|---|---|\n");
+    let names: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
+    let mut md = format!(
+        "| problem | error measure | {} |\n|---|---|{}\n| | theory | {} |\n",
+        names.join(" | "),
+        "---|".repeat(names.len()),
+        Integrator::ALL.map(|i| i.order().to_string()).join(" | ")
+    );
     for p in &problems {
         let orders: Vec<String> = Integrator::ALL
             .into_iter()

@@ -29,9 +29,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run a .lagra scene and certify its @expect claims with interval arithmetic.
-    #[command(after_help = "Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or \
-was UNDECIDED, a prediction disagreed or could not be measured, or the run halted (a singular force, a non-finite \
-state); 2 bad input (the scene, a file, an argument).")]
+    #[command(after_help = run::after_help())]
     Run(run::Args),
     /// Re-check a certificate without the kernel (the same code and output as `lagra-check`),
     /// and with --scene, check that it certifies that scene.

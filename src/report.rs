@@ -6,6 +6,7 @@ use lagra_checker::monitor::Halt;
 use lagra_checker::render::{lines, sci, up};
 use lagra_kernel::run::{Measured, Report, Stop};
 use lagra_kernel::scene::Scene;
+use lagra_kernel::solvers::Iterations;
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -37,8 +38,11 @@ pub struct Summary {
     time_unit: &'static str,
     pub steps: u64,
     pub wall_s: f64,
-    pub steps_per_s: f64,
-    pub ns_per_atom_step: f64,
+    /// None for a run that took no step (no rate to give).
+    pub steps_per_s: Option<f64>,
+    pub ns_per_atom_step: Option<f64>,
+    /// How the iterations inside the solver's steps went (RATTLE's sweeps, action windows).
+    pub iterations: Option<Iterations>,
     pub threads: usize,
     /// How each term group visited its bodies: `[kind, plan]`.
     pub plan: Vec<(&'static str, String)>,
@@ -78,7 +82,7 @@ impl Summary {
                 format!("halted at step {}: {} is certainly violated", b.step, b.claim.name())
             }
             Stop::Checker(Halt::InvalidState(m)) => format!("halted: {m}"),
-            Stop::Singular { step, message } => format!("halted at step {step}: {message}"),
+            Stop::Solver { step, message } => format!("halted at step {step}: {message}"),
         });
         let passed =
             halted.is_none() && claims.iter().all(|c| c.verdict.is_pass()) && r.predictions.iter().all(|p| p.agrees);
@@ -94,8 +98,9 @@ impl Summary {
             time_unit: if scene.model.units == UnitSystem::Si { " s" } else { "" },
             steps: r.steps,
             wall_s: r.wall_s,
-            steps_per_s: r.steps as f64 / r.wall_s,
-            ns_per_atom_step: r.wall_s * 1e9 / atom_steps,
+            steps_per_s: (r.steps > 0).then(|| r.steps as f64 / r.wall_s),
+            ns_per_atom_step: (r.steps > 0).then(|| r.wall_s * 1e9 / atom_steps),
+            iterations: r.iterations.clone(),
             threads,
             plan: r.plan.iter().map(|(k, p)| (k.name(), p.clone())).collect(),
             checker: r.checker,
@@ -122,15 +127,24 @@ impl Summary {
         let _ = writeln!(s, "bodies      {}", self.bodies);
         let _ = writeln!(s, "terms       {terms}");
         let _ = writeln!(s, "integrator  {}, dt {}{}, {} steps", self.integrator, self.dt, self.time_unit, self.steps);
-        let _ = writeln!(
-            s,
-            "wall        {:.3} s ({:.0} steps/s, {:.1} ns/atom-step, {} thread{})",
-            self.wall_s,
-            self.steps_per_s,
-            self.ns_per_atom_step,
-            self.threads,
-            if self.threads == 1 { "" } else { "s" }
-        );
+        let rate = match (self.steps_per_s, self.ns_per_atom_step) {
+            (Some(steps), Some(ns)) => format!("{steps:.0} steps/s, {ns:.1} ns/atom-step, "),
+            _ => String::new(),
+        };
+        let threads = format!("{} thread{}", self.threads, if self.threads == 1 { "" } else { "s" });
+        let _ = writeln!(s, "wall        {:.3} s ({rate}{threads})", self.wall_s);
+        if let Some(it) = &self.iterations.as_ref().filter(|it| it.solves > 0) {
+            let _ = writeln!(
+                s,
+                "iterations  {}: {} solves, {:.1} rounds each on average, at most {}; worst final residual {} (tol {})",
+                it.what,
+                it.solves,
+                it.iterations as f64 / it.solves as f64,
+                it.most_iterations,
+                up(it.worst_residual),
+                sci(it.tol)
+            );
+        }
         if self.explain {
             for (kind, plan) in &self.plan {
                 let _ = writeln!(s, "plan        {kind}: {plan}");

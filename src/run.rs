@@ -8,6 +8,7 @@ use lagra_checker::model::Snapshot;
 use lagra_checker::states::StateWriter;
 use lagra_kernel::lang::compile;
 use lagra_kernel::run::{run, Options};
+use lagra_kernel::solvers::Integrator;
 use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
@@ -50,6 +51,23 @@ pub struct Args {
     /// along a floor's normal); without it that is a warning.
     #[arg(long)]
     strict: bool,
+}
+
+/// What `lagra run --help` says after the options: the integrators a scene's `solver` block
+/// may name, and the exit status.
+pub fn after_help() -> String {
+    let mut s = String::from("Integrators (solver { integrator: \"NAME\", ... } in the scene):\n");
+    for i in Integrator::ALL {
+        let settings = match i.settings() {
+            [] => String::new(),
+            names => format!(" [settings: {}]", names.join(", ")),
+        };
+        s += &format!("  {:<17} {}{settings}\n", i.name(), i.about());
+    }
+    s + "Without one, a scene gets velocity_verlet, or rattle if it declares constraints.\n\n\
+Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or was UNDECIDED, a prediction \
+disagreed or could not be measured, or the run halted (a singular force, an iteration that did not converge, a \
+non-finite state); 2 bad input (the scene, a file, an argument)."
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]

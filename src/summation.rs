@@ -101,7 +101,8 @@ pub fn study(steps: u64) -> Result<Study, String> {
     let graph = LagrangianGraph::new(&scene.model);
     let mut s = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
     let start = witnesses(&scene.model, &s);
-    let mut stepper = Stepper::new(Integrator::VelocityVerlet, &graph, &s).map_err(|e| e.to_string())?;
+    let mut stepper = Stepper::new(Integrator::VelocityVerlet, Integrator::VelocityVerlet.defaults(), &graph, &s)
+        .map_err(|e| e.to_string())?;
     for _ in 0..steps {
         stepper.step(&graph, &mut s, scene.solver.dt).map_err(|e| e.to_string())?;
     }

@@ -146,7 +146,7 @@ impl Certificate {
             if claim.kind != trail.claim {
                 return Err(format!("trail for {} stands where {} is claimed", trail.claim.name(), claim.kind.name()));
             }
-            claim.validate(c.model.bodies.len())?;
+            claim.validate(&c.model)?;
             if let Some(m) = trail.marks.iter().find(|m| m.lo > m.hi) {
                 return Err(format!(
                     "{} at step {}: enclosure [{}, {}] is upside down",

@@ -1,5 +1,6 @@
 //! The invariants a scene may declare with `@expect`.
 
+use crate::model::Model;
 use crate::units::Dim;
 use serde::{Deserialize, Serialize};
 
@@ -18,15 +19,19 @@ pub enum ClaimKind {
     /// The distance between two bodies stays within [min, max] (at every checkpoint, step 0
     /// included).
     Distance,
+    /// Every distance constraint holds: | |xⱼ − xᵢ| − length | ≤ tol·length (at every
+    /// checkpoint, step 0 included).
+    ConstraintSatisfied,
 }
 
 impl ClaimKind {
-    pub const ALL: [ClaimKind; 5] = [
+    pub const ALL: [ClaimKind; 6] = [
         ClaimKind::EnergyConservation,
         ClaimKind::MomentumConservation,
         ClaimKind::AngularMomentumConservation,
         ClaimKind::DimensionalConsistency,
         ClaimKind::Distance,
+        ClaimKind::ConstraintSatisfied,
     ];
 
     pub fn name(self) -> &'static str {
@@ -36,6 +41,7 @@ impl ClaimKind {
             ClaimKind::AngularMomentumConservation => "angular_momentum_conservation",
             ClaimKind::DimensionalConsistency => "dimensional_consistency",
             ClaimKind::Distance => "distance",
+            ClaimKind::ConstraintSatisfied => "constraint_satisfied",
         }
     }
 
@@ -57,20 +63,20 @@ impl ClaimKind {
         )
     }
 
-    /// The dimension of `tol`, for claims that take one: energy's is relative, the momenta's
-    /// absolute.
+    /// The dimension of `tol`, for claims that take one: energy's and the constraints' are
+    /// relative, the momenta's absolute.
     pub fn tol_dim(self) -> Option<Dim> {
         match self {
-            ClaimKind::EnergyConservation => Some(Dim::NONE),
+            ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied => Some(Dim::NONE),
             ClaimKind::MomentumConservation => Some(Dim([1, 1, -1, 0])),
             ClaimKind::AngularMomentumConservation => Some(Dim([1, 2, -1, 0])),
             ClaimKind::DimensionalConsistency | ClaimKind::Distance => None,
         }
     }
 
-    /// Whether `tol` must be given (a relative energy tolerance has no natural default).
+    /// Whether `tol` must be given (a relative tolerance has no natural default).
     pub fn needs_tol(self) -> bool {
-        self == ClaimKind::EnergyConservation
+        matches!(self, ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied)
     }
 
     /// Whether the claim may be declared more than once (for different bodies).
@@ -132,9 +138,13 @@ impl Claim {
         }
     }
 
-    /// Rejects a claim that does not fit its kind or a model of `bodies` bodies.
-    pub fn validate(&self, bodies: usize) -> Result<(), String> {
+    /// Rejects a claim that does not fit its kind or the model.
+    pub fn validate(&self, model: &Model) -> Result<(), String> {
+        let bodies = model.bodies.len();
         let name = self.label();
+        if self.kind == ClaimKind::ConstraintSatisfied && model.constraints.is_empty() {
+            return Err(format!("{name}: the model has no constraint"));
+        }
         if self.kind.needs_tol() && self.tol.is_none() {
             return Err(format!("{name} needs a tolerance"));
         }

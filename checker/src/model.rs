@@ -47,6 +47,16 @@ impl TermInstance {
     }
 }
 
+/// A holonomic distance constraint: two bodies held `length` apart, as by a massless rigid rod.
+/// It does no work, so it enters no energy; the solver keeps it (RATTLE) and the
+/// `constraint_satisfied` claim certifies how well.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Constraint {
+    pub bodies: [usize; 2],
+    pub length: f64,
+}
+
 /// A box, periodic along some axes: pair and bond terms see the nearest image.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,6 +120,8 @@ pub struct Model {
     pub cell: Option<Cell>,
     pub bodies: Vec<Body>,
     pub terms: Vec<TermInstance>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<Constraint>,
 }
 
 /// A state of the system as the kernel produced it, exactly.
@@ -160,6 +172,15 @@ impl Model {
             }
             if let Some(&s) = t.sites.iter().find(|&&s| s >= self.bodies.len()) {
                 return Err(format!("term {n} ({name}): body {s} does not exist ({} bodies)", self.bodies.len()));
+            }
+        }
+        for (n, c) in self.constraints.iter().enumerate() {
+            let [i, j] = c.bodies;
+            if i == j || i.max(j) >= self.bodies.len() {
+                return Err(format!("constraint {n}: needs two different bodies of the {}", self.bodies.len()));
+            }
+            if !(c.length.is_finite() && c.length > 0.0) {
+                return Err(format!("constraint {n}: length must be finite and positive, got {}", c.length));
             }
         }
         Ok(())

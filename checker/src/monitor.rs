@@ -101,13 +101,23 @@ fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model) -> Vec<E> {
         ClaimKind::Distance => {
             c.between.as_ref().map(|b| vec![q.distance(b.bodies[0], b.bodies[1])]).unwrap_or_default()
         }
+        // each constraint's relative error | |xⱼ − xᵢ| − length | / length
+        ClaimKind::ConstraintSatisfied => model
+            .constraints
+            .iter()
+            .map(|k| {
+                let d = q.distance(k.bodies[0], k.bodies[1]);
+                let length = d.lift(k.length);
+                (d - length.clone()).abs() / length
+            })
+            .collect(),
         ClaimKind::DimensionalConsistency => vec![],
     }
 }
 
 /// How far the claimed quantity is from where it must be: |H + Q − H₀|/|H₀| for energy, the
 /// largest claimed component of |X − X₀| for the momenta, max(min − d, d − max) for a distance
-/// (at most 0 inside its bounds).
+/// (at most 0 inside its bounds), the largest relative error of a constraint.
 fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
     match (c.kind, &c.between) {
         (ClaimKind::EnergyConservation, _) => {
@@ -118,6 +128,7 @@ fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated
             let d = now[0].clone();
             (d.lift(b.min) - d.clone()).max(d.clone() - d.lift(b.max))
         }
+        (ClaimKind::ConstraintSatisfied, _) => now.into_iter().reduce(|m, d| m.max(d)).expect("a constraint"),
         _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("a component"),
     }
 }
@@ -125,7 +136,7 @@ fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated
 impl Monitor {
     pub fn new(model: Model, claims: Vec<Claim>, last_step: u64) -> Result<Self, String> {
         model.validate()?;
-        claims.iter().try_for_each(|c| c.validate(model.bodies.len()))?;
+        claims.iter().try_for_each(|c| c.validate(&model))?;
         let balance = is_balance(&model, &claims);
         let tracks = claims
             .into_iter()
@@ -373,6 +384,7 @@ mod tests {
                 Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
+            constraints: vec![],
         }
     }
 
@@ -459,6 +471,7 @@ mod tests {
             cell: None,
             bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
+            constraints: vec![],
         };
         (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])
     }

@@ -342,6 +342,7 @@ mod tests {
                 TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -g, 0.0] },
                 TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.7] },
             ],
+            constraints: vec![],
         }
     }
 
@@ -392,6 +393,7 @@ mod tests {
             cell: Some(Cell { size: [14.3; 3], periodic: [true; 3] }),
             bodies: vec![body; 2197],
             terms: vec![TermInstance { kind: Kind::LennardJonesShifted, sites: vec![], params: vec![1.0, 1.0, 2.5] }],
+            constraints: vec![],
         };
         let jitter = |k: usize| ((k * 7919 % 1000) as f64 / 1000.0 - 0.5) * 0.2;
         let x = (0..2197).map(|k| [k % 13, k / 13 % 13, k / 169].map(|c| c as f64 * 1.1 + jitter(k + c))).collect();

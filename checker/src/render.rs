@@ -49,6 +49,7 @@ fn measure(kind: ClaimKind, balance: bool) -> &'static str {
         ClaimKind::MomentumConservation => "|ΔP|",
         ClaimKind::AngularMomentumConservation => "|ΔL|",
         ClaimKind::Distance => "max(min−d, d−max)",
+        ClaimKind::ConstraintSatisfied => "|d−ℓ|/ℓ",
         ClaimKind::DimensionalConsistency => "",
     }
 }
@@ -96,6 +97,10 @@ fn line(v: &Verdict, c: &Claim, balance: &[&str]) -> String {
         ),
         (Verdict::Fail(b), _) => {
             format!("{name} FAIL  at step {}: {q} ∈ [{}, {}] > {}{via}", b.step, sci(b.lower), up(b.upper), tol(b.tol))
+        }
+        // the judge's record of a claim that saw no checkpoint (the run stopped before its first)
+        (Verdict::Undecided(b), _) if b.lower.is_nan() && b.step == 0 => {
+            format!("{name} UNDECIDED  no checkpoint was judged: the run stopped before its first")
         }
         (Verdict::Undecided(b), _) if b.lower.is_nan() => {
             format!("{name} UNDECIDED  at step {}: the quantity could not be enclosed", b.step)

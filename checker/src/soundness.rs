@@ -93,6 +93,7 @@ fn model() -> Model {
             TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.5] },
             TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -1.0, 0.0] },
         ],
+        constraints: vec![],
     }
 }
 

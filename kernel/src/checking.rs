@@ -263,7 +263,7 @@ mod tests {
         for (tol, dt, every, ends) in [
             (1e-2, 0.05, 7, "None"),
             (1e-5, 0.05, 7, "Some(Checker(Breach"),
-            (1.0, 1.5, 1000, "Some(Singular { step: 172"),
+            (1.0, 1.5, 1000, "Some(Solver { step: 172"),
         ] {
             let scene = compile(&format!(
                 "scene s {{ entity {{ position: [0, 0, 0], mass: 1 }} entity {{ position: [1.3, 0.1, 0], mass: 2 }}
@@ -292,7 +292,7 @@ mod tests {
             same(&straight, &watched);
             assert!(
                 reached.windows(2).all(|w| w[0] < w[1]) && reached.last() == Some(&watched.steps)
-                    || matches!(watched.stop, Some(Stop::Singular { .. })),
+                    || matches!(watched.stop, Some(Stop::Solver { .. })),
                 "{reached:?}"
             );
         }

@@ -1,9 +1,15 @@
-//! The Lagrangian graph: bodies (the vertices) and the term instances (the edges), grouped by
-//! kind so the kernel dispatches once per group, not once per edge. A kind the scene does not
-//! use has no group and costs nothing.
+//! The Lagrangian graph: bodies (the vertices), the term instances and the constraints (the
+//! edges), the terms grouped by kind so the kernel dispatches once per group, not once per edge.
+//! A kind the scene does not use has no group and costs nothing.
+//!
+//! The graph also offers the few operations a step is made of — evaluate the forces (all of
+//! them, or all but the gyroscopic ones), kick, drift, rotate by the gyroscopic ω, project onto
+//! the constraints — and each solver (`solvers/`) is a short program over them.
 
+use crate::constraints::{Constraints, Swept, Tolerance, Unconverged};
 use crate::forces::{group, Force, Frame, Parts, Pool, Singularity};
 use crate::state::State;
+use crate::step::{self, Stride};
 use crate::sum::Sum;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Kind;
@@ -18,6 +24,15 @@ pub struct LagrangianGraph {
     charges: Vec<f64>,
     colours: Vec<[f64; 2]>,
     groups: Vec<(Kind, Box<dyn Force>)>,
+    constraints: Option<Constraints>,
+}
+
+/// Which forces an evaluation adds up.
+#[derive(Clone, Copy, PartialEq)]
+enum Which {
+    All,
+    /// Every group but the gyroscopic ones, which a solver rotates by instead (Boris).
+    Positional,
 }
 
 impl LagrangianGraph {
@@ -55,7 +70,8 @@ impl LagrangianGraph {
         let inverse_masses = model.bodies.iter().map(|b| 1.0 / b.mass).collect();
         let velocity_dependent = groups.iter().any(|g| g.1.velocity_dependent());
         let colours = model.bodies.iter().map(|b| b.colour).collect();
-        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups }
+        let constraints = Constraints::of(model);
+        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups, constraints }
     }
 
     /// The kinds present, in dispatch order.
@@ -73,14 +89,42 @@ impl LagrangianGraph {
         self.velocity_dependent
     }
 
+    /// Whether a velocity-dependent group is left once the gyroscopic ones are rotated by.
+    pub fn velocity_dependent_positional(&self) -> bool {
+        self.groups.iter().any(|g| g.1.velocity_dependent() && !g.1.gyroscopic())
+    }
+
     /// Writes the generalized forces into `f` and returns the potential energy (a witness).
     pub fn forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
-        self.evaluate(s, f, true)
+        self.evaluate(s, f, true, Which::All)
     }
 
     /// Writes the generalized forces into `f`, and nothing else: for the steps no one sees.
     pub fn forces_only(&self, s: &State, f: &mut [[f64; 3]]) -> Result<(), Singularity> {
-        self.evaluate(s, f, false).map(|_| ())
+        self.evaluate(s, f, false, Which::All).map(|_| ())
+    }
+
+    /// The forces of every group but the gyroscopic ones, and the potential energy (theirs is
+    /// zero): what Boris kicks with.
+    pub fn positional_forces(&self, s: &State, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        self.evaluate(s, f, true, Which::Positional)
+    }
+
+    /// Each body's ω from the gyroscopic groups (F = m ω × v), into `w`.
+    pub fn gyration(&self, s: &State, w: &mut [[f64; 3]]) {
+        w.iter_mut().for_each(|wi| *wi = [0.0; 3]);
+        let frame = self.frame_parts().frame(s);
+        self.groups.iter().for_each(|(_, g)| g.gyration(&frame, w));
+    }
+
+    /// v += h·F/m.
+    pub fn kick(&self, v: &mut [[f64; 3]], f: &[[f64; 3]], h: f64) {
+        step::kick(v, f, &self.inverse_masses, h);
+    }
+
+    /// x += h·v.
+    pub fn drift(&self, s: &mut State, h: f64) {
+        step::drift(&mut s.x, &s.v, h);
     }
 
     /// The graph's only group, if it has one.
@@ -91,16 +135,47 @@ impl LagrangianGraph {
         }
     }
 
+    /// The inner steps of a conservative velocity Verlet run, monomorphized around the force
+    /// code where the graph has one group.
+    pub fn stride(&self, stride: Stride) -> Result<(), Singularity> {
+        match self.sole() {
+            Some(group) => group.stride(stride, self.frame_parts()),
+            None => stride.run(|s, f| self.forces_only(s, f)),
+        }
+    }
+
     /// What a force group reads of the bodies besides the state: masses, charges, colours.
     pub fn frame_parts(&self) -> Parts<'_> {
         Parts { m: &self.masses, q: &self.charges, c: &self.colours }
     }
 
-    fn evaluate(&self, s: &State, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
+    /// Whether the graph has constraints to keep.
+    pub fn constrained(&self) -> bool {
+        self.constraints.is_some()
+    }
+
+    /// SHAKE: the positions moved onto the constraints along the rods as they were at
+    /// `before`, the velocities by the same over `dt`.
+    pub fn shake(&self, before: &[[f64; 3]], s: &mut State, dt: f64, tol: Tolerance) -> Result<Swept, Unconverged> {
+        match &self.constraints {
+            None => Ok(Swept { sweeps: 0, error: 0.0 }),
+            Some(c) => c.positions(before, &mut s.x, &mut s.v, &self.inverse_masses, dt, tol),
+        }
+    }
+
+    /// RATTLE: the velocities made tangent to the constraints.
+    pub fn rattle(&self, s: &mut State, dt: f64, tol: Tolerance) -> Result<Swept, Unconverged> {
+        match &self.constraints {
+            None => Ok(Swept { sweeps: 0, error: 0.0 }),
+            Some(c) => c.velocities(&s.x, &mut s.v, &self.inverse_masses, dt, tol),
+        }
+    }
+
+    fn evaluate(&self, s: &State, f: &mut [[f64; 3]], energy: bool, which: Which) -> Result<f64, Singularity> {
         f.iter_mut().for_each(|fi| *fi = [0.0; 3]);
         let frame = Frame { x: &s.x, v: &s.v, m: &self.masses, q: &self.charges, c: &self.colours };
         let mut potential = Sum::default();
-        for (_, g) in &self.groups {
+        for (_, g) in self.groups.iter().filter(|g| which == Which::All || !g.1.gyroscopic()) {
             potential.add(g.accumulate(&frame, f, energy)?);
         }
         Ok(potential.value())

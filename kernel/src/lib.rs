@@ -3,6 +3,7 @@
 //! this crate produces.
 
 pub mod checking;
+pub mod constraints;
 pub mod forces;
 pub mod graph;
 pub mod lang;
@@ -12,5 +13,6 @@ pub mod run;
 pub mod scene;
 pub mod solvers;
 pub mod state;
+pub mod step;
 pub mod sum;
 pub mod traverse;

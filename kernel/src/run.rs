@@ -6,7 +6,7 @@ use crate::checking::{can_overlap, Checking};
 use crate::graph::LagrangianGraph;
 use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
-use crate::solvers::Stepper;
+use crate::solvers::{Iterations, Stepper};
 use crate::state::{kinetic, State};
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
@@ -20,8 +20,9 @@ use std::time::Instant;
 pub enum Stop {
     /// The checker certified that a claim is violated (or could not evaluate the state).
     Checker(Halt),
-    /// A force is undefined at this state.
-    Singular { step: u64, message: String },
+    /// The solver could not take this step: a force is undefined there, or an iteration inside
+    /// the step (constraints, an action window) did not reach its tolerance.
+    Solver { step: u64, message: String },
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -50,6 +51,8 @@ pub struct Report {
     pub plan: Vec<(Kind, String)>,
     /// Where the checker ran: inline, or on a second thread overlapping the kernel.
     pub checker: &'static str,
+    /// How the iterations inside the solver's steps went (RATTLE, action descent).
+    pub iterations: Option<Iterations>,
 }
 
 /// Keeps the states a run produces (the state file's writer).
@@ -122,14 +125,15 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // The checker's own test of a state (sizes, finiteness), for when no claim looks at it.
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
+    let mut iterations = None;
     let monitor = std::thread::scope(|scope| -> Result<Monitor, String> {
         let mut checking = if overlap {
             Checking::overlapped(scope, monitor, &scene.claims, steps)
         } else {
             Checking::Inline(monitor)
         };
-        match Stepper::new(scene.solver.integrator, &graph, &state) {
-            Err(e) => stop = Some(Stop::Singular { step: 0, message: e.to_string() }),
+        match Stepper::new(scene.solver.integrator, scene.solver.settings, &graph, &state) {
+            Err(e) => stop = Some(Stop::Solver { step: 0, message: e.to_string() }),
             Ok(mut solver) => {
                 stop = check(&mut checking, &mut state)?;
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
@@ -144,7 +148,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         checking.next_due(state.step).min(next_frame).min(next(stride, state.step))
                     };
                     if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
-                        stop = Some(Stop::Singular { step: state.step + 1, message: e.to_string() });
+                        stop = Some(Stop::Solver { step: state.step + 1, message: e.to_string() });
                         break;
                     }
                     stop = check(&mut checking, &mut state)?;
@@ -162,6 +166,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 if stop.is_none() {
                     stop = non_finite(&state);
                 }
+                iterations = solver.iterations().cloned();
             }
         }
         // a breach at the checkpoint still being judged came first
@@ -203,5 +208,6 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         } else {
             "inline, at every checkpoint"
         },
+        iterations,
     })
 }

@@ -3,13 +3,15 @@
 
 use crate::lang::Span;
 use crate::predict::Prediction;
-use crate::solvers::Integrator;
+use crate::solvers::{Integrator, Settings};
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 
 #[derive(Clone, Debug)]
 pub struct Solver {
     pub integrator: Integrator,
+    /// What an iterating integrator iterates to (its defaults where the scene gives none).
+    pub settings: Settings,
     pub dt: f64,
     pub steps: u64,
     pub steps_per_frame: u64,

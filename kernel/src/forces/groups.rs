@@ -2,7 +2,7 @@
 
 use super::{stride_alone, sub, Bonded, Field, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::neighbours::{Neighbours, Pair};
-use crate::solvers::Stride;
+use crate::step::Stride;
 use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Images, Model, TermInstance};
@@ -20,6 +20,12 @@ trait Finite: Sized {
 }
 
 const OVERFLOW: &str = "so close to a singular configuration that the force overflows binary64";
+const FAR: &str = "so far apart that their separation overflows binary64 (beyond 1.8e308): no force can be computed";
+
+/// Whether a displacement between two bodies overflowed (bodies near ±1e308 on opposite sides).
+fn overflowed(d: &[f64; 3]) -> bool {
+    !d.iter().all(|c| c.is_finite())
+}
 
 /// Whether a force's coordinates, and its energy if it counts, are finite.
 fn all_finite(force: &[f64], e: f64, energy: bool) -> Result<(), &'static str> {
@@ -102,9 +108,10 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
             };
             // velocities only for a group that reads them (`Bonded::velocity_dependent`)
             let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
-            let (fs, e) = T::eval(self.rows.row(k), &x, &v)
-                .and_then(|r| r.finite(energy))
-                .map_err(|what| Singularity { term: self.name, bodies: b.to_vec(), what })?;
+            let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(|r| r.finite(energy)).map_err(|what| {
+                let far = x.iter().any(|xi| overflowed(&sub(xi, &x[0])));
+                Singularity { term: self.name, bodies: b.to_vec(), what: if far { FAR } else { what } }
+            })?;
             for (i, fi) in b.iter().zip(fs) {
                 for c in 0..3 {
                     f[*i][c] += fi[c];
@@ -260,6 +267,9 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     fn traversed(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
         let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
+            if overflowed(&d) {
+                return Err(Singularity { term: self.name, bodies: vec![i, j], what: FAR });
+            }
             let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
             for p in &self.rows {
                 let (a, e) = T::eval(p, d, mq, colour).and_then(|r| r.finite(true)).map_err(|what| Singularity {
@@ -387,6 +397,25 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
+    }
+    fn gyroscopic(&self) -> bool {
+        T::GYROSCOPIC
+    }
+    fn gyration(&self, s: &Frame, w: &mut [[f64; 3]]) {
+        if !T::GYROSCOPIC {
+            return;
+        }
+        for (p, on) in self.rows.iter().zip(&self.on) {
+            let mut one = |i: usize| {
+                let o = T::gyration(p, &s.x[i], s.m[i], s.q[i]);
+                (0..3).for_each(|c| w[i][c] += o[c]);
+            };
+            if on.is_empty() {
+                (0..s.x.len()).for_each(&mut one);
+            } else {
+                on.iter().for_each(|&i| one(i));
+            }
+        }
     }
     fn plan(&self) -> String {
         format!("{} instance(s), each on its bodies in order", self.on.len())

@@ -31,8 +31,8 @@ mod yukawa;
 #[cfg(test)]
 pub(crate) mod dual;
 
-use crate::solvers::Stride;
 use crate::state::State;
+use crate::step::Stride;
 use groups::{Bonds, Fields, Pairs};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
@@ -96,6 +96,13 @@ pub trait Force: Send + Sync {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity>;
     /// Whether the force depends on velocities (the solver then iterates its closing kick).
     fn velocity_dependent(&self) -> bool;
+    /// Whether the group's force only turns velocities, F = m ω × v (a magnetic field), so that
+    /// a solver may rotate by ω instead of kicking (Boris).
+    fn gyroscopic(&self) -> bool {
+        false
+    }
+    /// Adds the group's ω of each body to `w` (nothing for a group that is not gyroscopic).
+    fn gyration(&self, _s: &Frame, _w: &mut [[f64; 3]]) {}
     /// How the group visits its bodies, in a line (`lagra run --explain`).
     fn plan(&self) -> String;
 }
@@ -132,6 +139,12 @@ pub trait Field {
     fn eval(p: &[f64], x: &[f64; 3], v: &[f64; 3], m: f64, q: f64) -> Result<([f64; 3], f64), &'static str>;
     fn velocity_dependent(_p: &[f64]) -> bool {
         false
+    }
+    /// Whether the force only turns the velocity: `eval` is then m ω × v with ω from `gyration`
+    /// (a test holds the two together).
+    const GYROSCOPIC: bool = false;
+    fn gyration(_p: &[f64], _x: &[f64; 3], _m: f64, _q: f64) -> [f64; 3] {
+        [0.0; 3]
     }
 }
 
@@ -195,43 +208,61 @@ mod tests {
     use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
     use lagra_checker::terms::{Kind, Shape};
 
+    /// A group of one instance of `kind` (generic parameters) on n bodies, and n.
+    fn one_of(kind: Kind) -> (Model, usize) {
+        let spec = kind.spec();
+        let params: Vec<f64> = spec
+            .params
+            .iter()
+            .flat_map(|p| std::iter::repeat_n(if p.name == "R0" { 3.0 } else { 1.0 }, p.len))
+            .collect();
+        let n = spec.shape.arity().max(2);
+        let bodies =
+            (0..n).map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64] }).collect();
+        let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
+        let terms = vec![TermInstance { kind, sites, params }];
+        (Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![] }, n)
+    }
+
+    /// Every term at positions `x` (n of them): finite forces and energy, or a clear error.
+    fn finite_or_error(kind: Kind, x: &[[f64; 3]]) -> Result<(), &'static str> {
+        let (model, n) = one_of(kind);
+        let g = group(kind, &[&model.terms[0]], &model, &None);
+        let v = vec![[0.2, -0.1, 0.05]; n];
+        let (m, q, c) = (vec![1.0; n], vec![1.0; n], vec![[0.5, 0.3]; n]);
+        let mut f = vec![[0.0; 3]; n];
+        match g.accumulate(&Frame { x: &x[..n], v: &v, m: &m, q: &q, c: &c }, &mut f, true) {
+            Ok(e) => {
+                assert!(e.is_finite() && f.iter().flatten().all(|c| c.is_finite()), "{kind:?} at {x:?}: {e} {f:?}");
+                Ok(())
+            }
+            Err(s) => Err(s.what),
+        }
+    }
+
     /// Every term, with bodies 0 and 1 brought to `r` apart (down to 0), gives finite forces and
     /// energy or a clear error: never a NaN or an infinity.
     #[test]
     fn near_singular_configurations_are_finite_or_a_clear_error() {
         for &kind in Kind::ALL {
-            let spec = kind.spec();
-            let params: Vec<f64> = spec
-                .params
-                .iter()
-                .flat_map(|p| std::iter::repeat_n(if p.name == "R0" { 3.0 } else { 1.0 }, p.len))
-                .collect();
-            let n = spec.shape.arity().max(2);
-            let bodies = (0..n)
-                .map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64] })
-                .collect();
-            let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
-            let model = Model {
-                units: UnitSystem::Reduced,
-                cell: None,
-                bodies,
-                terms: vec![TermInstance { kind, sites, params }],
-            };
-            let g = group(kind, &[&model.terms[0]], &model, &None);
             for r in [1e-300, 1e-160, 1e-100, 1e-20, 1e-8, 0.0] {
                 // at the origin, so that a tiny separation is not lost to rounding
-                let mut x = vec![[0.0; 3], [r, 0.0, 0.0]];
-                x.extend([[1.1, 0.9, 0.4], [2.0, -0.5, 1.3]].iter().take(n - 2));
-                let v = vec![[0.2, -0.1, 0.05]; n];
-                let (m, q, c) = (vec![1.0; n], vec![1.0; n], vec![[0.5, 0.3]; n]);
-                let mut f = vec![[0.0; 3]; n];
-                match g.accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &c }, &mut f, true) {
-                    Ok(e) => assert!(
-                        e.is_finite() && f.iter().flatten().all(|c| c.is_finite()),
-                        "{kind:?} at r = {r}: {e} {f:?}"
-                    ),
-                    Err(s) => assert!(!s.what.is_empty(), "{kind:?}"),
+                let x = [[0.0; 3], [r, 0.0, 0.0], [1.1, 0.9, 0.4], [2.0, -0.5, 1.3]];
+                if let Err(what) = finite_or_error(kind, &x) {
+                    assert!(!what.is_empty(), "{kind:?}");
                 }
+            }
+        }
+    }
+
+    /// Bodies on opposite sides of ±1e308, whose separation overflows binary64: finite forces,
+    /// or an error that says so (not that they are too close).
+    #[test]
+    fn bodies_beyond_binary64_apart_are_said_to_be() {
+        for &kind in Kind::ALL.iter().filter(|k| k.spec().shape != Shape::External) {
+            let x = [[-1e308, 0.0, 0.0], [1e308, 0.0, 0.0], [1.1, 0.9, 0.4], [2.0, -0.5, 1.3]];
+            if let Err(what) = finite_or_error(kind, &x) {
+                assert!(what.contains("so far apart"), "{kind:?}: {what}");
             }
         }
     }

@@ -5,11 +5,12 @@ use super::block::{flags, typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
 use super::lattice::{self, Draw, Packing};
 use super::{Pair, Rule};
+use crate::constraints::{Constraints, Tolerance};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Scene, Solver};
-use crate::solvers::Integrator;
+use crate::solvers::{Integrator, Settings};
 use lagra_checker::claims::{Between, Claim, ClaimKind};
-use lagra_checker::model::{Body, Cell, Model, TermInstance, UnitSystem};
+use lagra_checker::model::{Body, Cell, Constraint, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
 use lagra_checker::units::Dim;
 use std::collections::HashMap;
@@ -32,6 +33,18 @@ const COLOURS: &[(&str, [f64; 2])] = &[
 /// Run length when the solver gives neither `steps` nor `duration`.
 const DEFAULT_STEPS: u64 = 5000;
 
+/// A `solver` block as written: the integrator is settled once the whole scene is known (the
+/// default depends on its constraints), and so are the settings it may take.
+struct SolverBlock {
+    integrator: Option<(Integrator, Span)>,
+    /// `tol`, `iterations`, `window`, each with where it was written.
+    settings: Vec<(&'static str, f64, Span)>,
+    dt: f64,
+    steps: u64,
+    steps_per_frame: u64,
+    at: Span,
+}
+
 fn err<T>(span: impl Into<Span>, msg: impl Into<String>) -> Result<T, Diagnostic> {
     Err(Diagnostic::new(span.into(), msg))
 }
@@ -50,10 +63,13 @@ struct Compiler<'a> {
     claim_spans: Vec<Span>,
     noether: Option<NoetherRequest>,
     predictions: Vec<(PredictionKind, Option<f64>, Span)>,
-    solver: Option<Solver>,
+    solver: Option<SolverBlock>,
+    /// Each `constraint [i, j] { length }`: its bodies, its length if given, where it stands.
+    constraints: Vec<([usize; 2], Option<f64>, Span)>,
     cell: Option<(Cell, Span)>,
-    /// Where each term was written, for errors found once the whole scene is known.
+    /// Where each term was written, for errors found once the whole scene is known, and its line.
     term_at: Vec<Span>,
+    term_line: Vec<usize>,
     description: Option<String>,
     domain: Option<String>,
     /// Whether the box came from a lattice.
@@ -92,8 +108,10 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         noether: None,
         predictions: vec![],
         solver: None,
+        constraints: vec![],
         cell: None,
         term_at: vec![],
+        term_line: vec![],
         description: None,
         domain: None,
         lattice: false,
@@ -142,26 +160,21 @@ impl<'a> Compiler<'a> {
                 let kw = next().and(next()).expect("bond keyword");
                 let idx = next().expect("indices");
                 let kind = lookup(&kw, |s| matches!(s, Shape::Bond(_)), "bond")?;
-                let arity = kind.spec().shape.arity();
-                let indices: Vec<(usize, Span)> = idx
-                    .clone()
-                    .into_inner()
-                    .map(|i| match i.as_str().parse::<usize>() {
-                        Ok(n) => Ok((n, i.as_span().into())),
-                        Err(_) => err(i.as_span(), format!("body index `{}` is too large", i.as_str())),
-                    })
-                    .collect::<Result<_, _>>()?;
-                if indices.len() != arity {
-                    return err(idx.as_span(), format!("{} joins {arity} bodies, got {}", kind.name(), indices.len()));
-                }
-                for (n, (a, s)) in indices.iter().enumerate() {
-                    if indices[..n].iter().any(|(b, _)| a == b) {
-                        return err(*s, format!("{} lists body {a} twice", kind.name()));
-                    }
-                }
+                let indices = listed(&idx, kind.name(), kind.spec().shape.arity())?;
                 let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
                 self.terms.push(TermInstance { kind, sites: indices.iter().map(|i| i.0).collect(), params });
                 self.term_at.push(kw.as_span().into());
+                self.term_line.push(kw.line_col().0);
+                self.indices.push(indices);
+                Ok(())
+            }
+            Rule::constraint => {
+                let kw = next().expect("constraint keyword");
+                let indices = listed(&next().expect("indices"), "constraint", 2)?;
+                let mut b = Block::read(next(), kw.as_span().into())?;
+                let length = b.take("length").map(|f| self.rd.positive(&f, "constraint", Dim::LENGTH)).transpose()?;
+                b.check_names("constraint", &["length"])?;
+                self.constraints.push(([indices[0].0, indices[1].0], length, span));
                 self.indices.push(indices);
                 Ok(())
             }
@@ -188,6 +201,7 @@ impl<'a> Compiler<'a> {
                 let params = self.params(kind, block, kw.as_span().into())?;
                 self.terms.push(TermInstance { kind, sites: on.iter().map(|i| i.0).collect(), params });
                 self.term_at.push(kw.as_span().into());
+                self.term_line.push(kw.line_col().0);
                 self.indices.push(on);
                 Ok(())
             }
@@ -374,6 +388,19 @@ impl<'a> Compiler<'a> {
         let mut field = |name: &str| template.get(name).cloned();
         let (body, size) = self.body(&mut field, at, size)?;
         let cells = [cells[0] as usize, cells[1] as usize, cells[2] as usize];
+        let (bodies, need) = (kind.count(cells), kind.count(cells).saturating_mul(lattice::BYTES_PER_BODY));
+        if let Some(free) = lattice::available_memory().filter(|&free| need > free) {
+            let gb = |b: u64| b as f64 / 1e9;
+            return err(
+                value_span(&cells_f),
+                format!(
+                    "a lattice of {bodies} bodies would need about {:.1} GB ({} bytes a body: state, forces, neighbour list, the checker's enclosures); this machine has {:.1} GB free",
+                    gb(need),
+                    lattice::BYTES_PER_BODY,
+                    gb(free)
+                ),
+            );
+        }
         let (x, side) = kind.sites(density, cells);
         let v = lattice::velocities(x.len(), temperature / body.mass, seed, draw);
         self.cell = Some((Cell { size: side, periodic: [true; 3] }, at));
@@ -432,7 +459,7 @@ impl<'a> Compiler<'a> {
             ClaimKind::DimensionalConsistency => vec![],
             ClaimKind::Distance => vec!["between", "min", "max", "every"],
             ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation => vec!["tol", "every", "axes"],
-            ClaimKind::EnergyConservation => vec!["tol", "every"],
+            ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied => vec!["tol", "every"],
         };
         if allowed.contains(&"axes") {
             if let Some(f) = b.take("axes") {
@@ -480,15 +507,16 @@ impl<'a> Compiler<'a> {
         Ok(())
     }
 
-    fn solver(&self, mut b: Block) -> Result<Solver, Diagnostic> {
+    fn solver(&self, mut b: Block) -> Result<SolverBlock, Diagnostic> {
         let integrator = match b.take("integrator") {
-            None => Integrator::VelocityVerlet,
+            None => None,
             Some(f) => {
                 let (name, at) = word(&f, "solver")?;
-                Integrator::from_name(name).ok_or_else(|| {
+                let integrator = Integrator::from_name(name).ok_or_else(|| {
                     let known: Vec<_> = Integrator::ALL.iter().map(|i| i.name()).collect();
                     Diagnostic::new(at, format!("unknown integrator `{name}`; known: {}", known.join(", ")))
-                })?
+                })?;
+                Some((integrator, at))
             }
         };
         let dt = b.take("dt").ok_or_else(|| Diagnostic::new(b.span, "solver needs a time step `dt`"))?;
@@ -506,11 +534,94 @@ impl<'a> Compiler<'a> {
             (None, None) => DEFAULT_STEPS,
         };
         let steps_per_frame = b.take("steps_per_frame").map(|f| self.rd.count(&f, "solver")).transpose()?.unwrap_or(10);
+        let mut settings = vec![];
+        if let Some(f) = b.take("tol") {
+            settings.push(("tol", self.rd.positive(&f, "solver", Dim::NONE)?, f.span));
+        }
+        for name in ["iterations", "window"] {
+            if let Some(f) = b.take(name) {
+                let n = self.rd.count(&f, "solver")?;
+                if n > u32::MAX as u64 {
+                    return err(value_span(&f), format!("solver.{name} is at most {}", u32::MAX));
+                }
+                settings.push((name, n as f64, f.span));
+            }
+        }
         b.check_names("solver", &[])?;
-        Ok(Solver { integrator, dt, steps, steps_per_frame })
+        Ok(SolverBlock { integrator, settings, dt, steps, steps_per_frame, at: b.span })
     }
 
-    fn finish(self, name: String, at: Span) -> Result<Scene, Diagnostic> {
+    /// The integrator the block names, or the one the model needs; its settings, each given one
+    /// checked to be one it takes; and whether it handles the model's terms.
+    fn settle(&self, b: SolverBlock) -> Result<Solver, Diagnostic> {
+        let constrained = !self.constraints.is_empty();
+        let (integrator, at) = b.integrator.unwrap_or((Integrator::default_for(constrained), b.at));
+        let mut settings: Settings = integrator.defaults();
+        for (name, value, span) in b.settings {
+            if !integrator.settings().contains(&name) {
+                let takes = match integrator.settings() {
+                    [] => "takes no settings".to_string(),
+                    s => format!("takes {}", s.join(", ")),
+                };
+                let owners: Vec<&str> =
+                    Integrator::ALL.iter().filter(|i| i.settings().contains(&name)).map(|i| i.name()).collect();
+                return err(
+                    span,
+                    format!("`{name}` is a setting of {}; {} {takes}", owners.join(" and "), integrator.name()),
+                );
+            }
+            match name {
+                "tol" => settings.tol = value,
+                "iterations" => settings.iterations = value as u32,
+                _ => settings.window = value as u32,
+            }
+        }
+        integrator.handles(&self.terms, constrained).map_err(|(term, why)| {
+            let wherefrom = term.map(|n| format!(" (line {})", self.term_line[n])).unwrap_or_default();
+            Diagnostic::new(at, format!("{why}{wherefrom}"))
+        })?;
+        Ok(Solver { integrator, settings, dt: b.dt, steps: b.steps, steps_per_frame: b.steps_per_frame })
+    }
+
+    /// Each constraint with its length (the bodies' initial distance if none is given), the
+    /// initial state checked to meet them within 10⁻⁶ and then moved onto them exactly (to the
+    /// solver's tolerance), the velocities made tangent.
+    fn constrain(&mut self, cell: &Option<Cell>, settings: &Settings) -> Result<Vec<Constraint>, Diagnostic> {
+        const PLACED: f64 = 1e-6;
+        let mut out = vec![];
+        for &([i, j], length, at) in &self.constraints {
+            let d = Cell::image(cell, std::array::from_fn(|c| self.x0[j][c] - self.x0[i][c]));
+            let apart = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let length = length.unwrap_or(apart);
+            if !(length > 0.0) {
+                return err(at, format!("constraint [{i}, {j}]: its bodies start at one point: give a `length`"));
+            }
+            if (apart - length).abs() > PLACED * length {
+                return err(at, format!("constraint [{i}, {j}] holds its bodies {length} apart, but they start {apart} apart: place them within {PLACED:e} of the length"));
+            }
+            out.push(Constraint { bodies: [i, j], length });
+        }
+        let model =
+            Model { units: self.rd.system, cell: *cell, bodies: self.bodies.clone(), terms: vec![], constraints: out };
+        if let Some(k) = Constraints::of(&model) {
+            let tol = Tolerance { tol: settings.tol.min(1e-12), sweeps: settings.iterations.max(1000) };
+            let inverse: Vec<f64> = self.bodies.iter().map(|b| 1.0 / b.mass).collect();
+            let before = self.x0.clone();
+            let mut scratch = self.v0.clone();
+            let placed = k
+                .positions(&before, &mut self.x0, &mut scratch, &inverse, 1.0, tol)
+                .and_then(|_| k.velocities(&self.x0, &mut self.v0, &inverse, 1.0, tol));
+            if let Err(e) = placed {
+                return err(
+                    self.constraints[e.constraint].2,
+                    format!("the initial state cannot be placed on the constraints: {e}"),
+                );
+            }
+        }
+        Ok(model.constraints)
+    }
+
+    fn finish(mut self, name: String, at: Span) -> Result<Scene, Diagnostic> {
         let n = self.bodies.len();
         if n == 0 {
             return err(at, format!("scene {name} has no entities"));
@@ -520,12 +631,20 @@ impl<'a> Compiler<'a> {
                 return err(*s, format!("body index {i} is out of range: the scene has {n} entities (0..{})", n - 1));
             }
         }
-        let solver = self.solver.ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
+        let block =
+            self.solver.take().ok_or_else(|| Diagnostic::new(at, format!("scene {name} has no solver block")))?;
         if let Some((c, _)) = &self.cell {
             reach_within(c, &self.terms, &self.term_at)?;
         }
         let cell = self.cell.map(|c| c.0);
-        let model = Model { units: self.rd.system, cell, bodies: self.bodies, terms: self.terms };
+        let solver = self.settle(block)?;
+        let constraints = self.constrain(&cell, &solver.settings)?;
+        for (c, s) in self.claims.iter().zip(&self.claim_spans) {
+            if c.kind == ClaimKind::ConstraintSatisfied && constraints.is_empty() {
+                return err(*s, "constraint_satisfied: the scene declares no constraint");
+            }
+        }
+        let model = Model { units: self.rd.system, cell, bodies: self.bodies, terms: self.terms, constraints };
         let predictions = self
             .predictions
             .into_iter()
@@ -586,6 +705,27 @@ fn axes(f: &Field, owner: &str) -> Result<[bool; 3], Diagnostic> {
         return err(at, format!("{owner}.axes names no axis"));
     }
     Ok(a)
+}
+
+/// The body indices of a bond or constraint: `arity` of them, each once.
+fn listed(idx: &Pair, owner: &str, arity: usize) -> Result<Vec<(usize, Span)>, Diagnostic> {
+    let indices: Vec<(usize, Span)> = idx
+        .clone()
+        .into_inner()
+        .map(|i| match i.as_str().parse::<usize>() {
+            Ok(n) => Ok((n, i.as_span().into())),
+            Err(_) => err(i.as_span(), format!("body index `{}` is too large", i.as_str())),
+        })
+        .collect::<Result<_, _>>()?;
+    if indices.len() != arity {
+        return err(idx.as_span(), format!("{owner} joins {arity} bodies, got {}", indices.len()));
+    }
+    for (n, (a, s)) in indices.iter().enumerate() {
+        if indices[..n].iter().any(|(b, _)| a == b) {
+            return err(*s, format!("{owner} lists body {a} twice"));
+        }
+    }
+    Ok(indices)
 }
 
 fn lookup(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, what: &str) -> Result<Kind, Diagnostic> {

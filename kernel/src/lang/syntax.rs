@@ -24,6 +24,7 @@ fn describe(r: &Rule) -> &'static str {
         Rule::units | Rule::kw_units => "`units`",
         Rule::template | Rule::entity | Rule::kw_entity => "`entity`",
         Rule::bond | Rule::kw_bond => "`bond`",
+        Rule::constraint | Rule::kw_constraint => "`constraint`",
         Rule::interaction | Rule::kw_interaction => "`interaction`",
         Rule::external => "a term",
         Rule::expect => "`@expect`",

@@ -35,7 +35,7 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
-    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `interaction`, `solver`, `box`, `lattice` or a name, found end of file"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `interaction`, `solver`, `box`, `lattice` or a name, found end of file"));
 }
 
 #[test]
@@ -48,7 +48,7 @@ fn unknown_keyword() {
         error("bond harmonic", "bond spring"),
         at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral, hbond")
     );
-    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance, noether"));
+    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance, constraint_satisfied, noether"));
 }
 
 #[test]
@@ -145,9 +145,87 @@ fn solver_errors() {
     assert_eq!(error("steps: 10", "steps: 2.5"), at(5, 29, "solver.steps expects a whole number ≥ 1, got 2.5"));
     assert_eq!(
         error("dt: 0.01", "dt: 0.01, integrator: rk45"),
-        at(5, 34, "unknown integrator `rk45`; known: velocity_verlet, yoshida4, rk4")
+        at(5, 34, "unknown integrator `rk45`; known: velocity_verlet, symplectic_euler, yoshida4, rk4, boris, rattle, action_descent")
     );
     assert_eq!(compile(&GOOD.replace("steps: 10", "duration: 1")).unwrap().solver.steps, 100);
+}
+
+/// An integrator that cannot handle the scene's terms, or a setting it does not take, is an
+/// error at the solver line.
+#[test]
+fn integrators_refuse_what_they_cannot_handle() {
+    let rod = "  constraint [0, 1] { length: 1 }\n  solver";
+    assert_eq!(
+        error_in(&GOOD.replace("  solver", rod), "dt: 0.01", "integrator: \"yoshida4\", dt: 0.01"),
+        at(6, 25, "yoshida4 cannot keep constraints: use `rattle`")
+    );
+    let drag = "  drag { gamma: 0.5 }\n  solver";
+    assert_eq!(
+        error_in(&GOOD.replace("  solver", drag), "dt: 0.01", "integrator: \"boris\", dt: 0.01"),
+        at(
+            6,
+            25,
+            "boris rotates velocities only for magnetic fields; `drag` is dissipative: use velocity_verlet (line 5)"
+        )
+    );
+    let magnetic = "  magnetic { B: [0, 0, 1] }\n  solver";
+    assert_eq!(
+        error_in(&GOOD.replace("  solver", magnetic), "dt: 0.01", "integrator: \"action_descent\", dt: 0.01"),
+        at(6, 25, "action_descent makes the action of L = T − V stationary; `magnetic` depends on velocities: use velocity_verlet (line 5)")
+    );
+    assert_eq!(
+        error("dt: 0.01", "dt: 0.01, window: 8"),
+        at(5, 22, "`window` is a setting of action_descent; velocity_verlet takes no settings")
+    );
+    assert_eq!(
+        error("dt: 0.01", "integrator: \"rattle\", dt: 0.01, window: 8"),
+        at(5, 44, "`window` is a setting of action_descent; rattle takes tol, iterations")
+    );
+    // Boris with a conservative field, RATTLE without constraints: fine
+    assert!(compile(
+        &GOOD
+            .replace("  solver", "  electric { E: [1, 0, 0] }\n  solver")
+            .replace("dt: 0.01", "integrator: \"boris\", dt: 0.01")
+    )
+    .is_ok());
+    assert!(compile(&GOOD.replace("dt: 0.01", "integrator: \"rattle\", dt: 0.01")).is_ok());
+}
+
+#[test]
+fn constraint_errors() {
+    let with = |c: &str| GOOD.replace("  solver", &format!("  {c}\n  solver"));
+    let scene = compile(&with("constraint [0, 1] { length: 1 }")).unwrap();
+    assert_eq!(scene.solver.integrator.name(), "rattle");
+    assert_eq!(scene.model.constraints[0].length, 1.0);
+    // without a length, the initial distance
+    assert_eq!(compile(&with("constraint [0, 1]")).unwrap().model.constraints[0].length, 1.0);
+    assert_eq!(
+        error_in(&with("constraint [0, 1] { length: 1.5 }"), "", ""),
+        at(5, 3, "constraint [0, 1] holds its bodies 1.5 apart, but they start 1 apart: place them within 1e-6 of the length")
+    );
+    assert_eq!(error_in(&with("constraint [0, 0]"), "", ""), at(5, 18, "constraint lists body 0 twice"));
+    assert_eq!(error_in(&with("constraint [0, 1, 2]"), "", ""), at(5, 14, "constraint joins 2 bodies, got 3"));
+    assert_eq!(
+        error_in(&with("constraint [0, 7]"), "", ""),
+        at(5, 18, "body index 7 is out of range: the scene has 2 entities (0..1)")
+    );
+    assert_eq!(
+        error_in(&with("constraint [0, 1] { length: 2 kg }"), "", ""),
+        at(5, 33, "constraint.length expects L (length), found M (mass)")
+    );
+    assert_eq!(
+        error_in(&with("@expect constraint_satisfied { tol: 1e-9 }"), "", ""),
+        at(5, 11, "constraint_satisfied: the scene declares no constraint")
+    );
+    // a start within 1e-6 of the length is moved onto it, and the velocities made tangent
+    let near = compile(
+        &with("constraint [0, 1] { length: 1.0000005 }")
+            .replace("mass: 1 }\n  bond", "mass: 1, velocity: [0.1, 0, 0] }\n  bond"),
+    )
+    .unwrap();
+    let d = near.x0[1][0] - near.x0[0][0];
+    assert!((d - 1.0000005).abs() <= 1e-12 * d, "{d}");
+    assert!((near.v0[1][0] - near.v0[0][0]).abs() < 1e-12, "{:?}", near.v0);
 }
 
 #[test]

@@ -1,152 +1,344 @@
-//! Solvers: programs over the graph that advance the state.
+//! Solvers: short programs over the graph's operations (evaluate, kick, drift, rotate, project),
+//! one file each, read like the algorithm in its paper. A solver keeps the forces at the current
+//! state between steps; `Stepper` runs the one a scene chose.
 
+mod action_descent;
+mod boris;
+mod rattle;
 mod rk4;
+mod symplectic_euler;
 mod velocity_verlet;
 mod yoshida;
 
-pub use velocity_verlet::{Stride, VelocityVerlet};
-
+use crate::constraints::{Tolerance, Unconverged};
 use crate::forces::Singularity;
 use crate::graph::LagrangianGraph;
 use crate::state::State;
+use crate::step::tick;
+use lagra_checker::model::TermInstance;
+use serde::Serialize;
+use std::fmt;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
     VelocityVerlet,
+    SymplecticEuler,
     Yoshida4,
     Rk4,
+    Boris,
+    Rattle,
+    ActionDescent,
+}
+
+/// The settings a `solver` block may give beyond dt and the run length, each read by the
+/// integrators that iterate inside a step (`Integrator::settings`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Relative tolerance of the iteration (RATTLE: of each constraint; action descent: of the
+    /// window's discrete Euler–Lagrange residual).
+    pub tol: f64,
+    /// Iteration cap (sweeps over the constraints; descent steps per window).
+    pub iterations: u32,
+    /// Steps per action window.
+    pub window: u32,
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 3] = [Integrator::VelocityVerlet, Integrator::Yoshida4, Integrator::Rk4];
+    pub const ALL: [Integrator; 7] = [
+        Integrator::VelocityVerlet,
+        Integrator::SymplecticEuler,
+        Integrator::Yoshida4,
+        Integrator::Rk4,
+        Integrator::Boris,
+        Integrator::Rattle,
+        Integrator::ActionDescent,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Integrator::VelocityVerlet => "velocity_verlet",
+            Integrator::SymplecticEuler => "symplectic_euler",
             Integrator::Yoshida4 => "yoshida4",
             Integrator::Rk4 => "rk4",
+            Integrator::Boris => "boris",
+            Integrator::Rattle => "rattle",
+            Integrator::ActionDescent => "action_descent",
         }
     }
 
     pub fn from_name(s: &str) -> Option<Integrator> {
         Integrator::ALL.into_iter().find(|i| i.name() == s)
     }
-}
 
-/// An integrator at work: it keeps the forces at the current state between steps.
-pub struct Stepper {
-    integrator: Integrator,
-    vv: VelocityVerlet,
-}
-
-impl Stepper {
-    pub fn new(integrator: Integrator, g: &LagrangianGraph, s: &State) -> Result<Self, Singularity> {
-        Ok(Stepper { integrator, vv: VelocityVerlet::new(g, s)? })
-    }
-
-    /// One step of `dt`: the state's step counter and clock advance with it (t = step·dt).
-    pub fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Singularity> {
-        self.advance_to(g, s, dt, s.step + 1)
-    }
-
-    /// Steps until the state is at step `until`; the steps in between are seen by no one, so
-    /// nothing else runs between them, and the integrator is chosen once, not per step. A
-    /// non-finite force is an error at the step it arises; the potential energy is that of the
-    /// state reached (velocity Verlet with conservative forces computes it at that step only;
-    /// the others stop after the first step that leaves it non-finite, where the run must stop).
-    pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Singularity> {
-        match self.integrator {
-            Integrator::VelocityVerlet => self.vv.advance_to(g, s, dt, until),
-            Integrator::Yoshida4 => self.repeat(g, s, dt, until, yoshida::advance),
-            Integrator::Rk4 => self.repeat(g, s, dt, until, |vv, g, s, dt| {
-                vv.potential = rk4::advance(g, s, dt, &mut vv.f)?;
-                Ok(())
-            }),
+    /// One line for `lagra run --help` and the language reference.
+    pub fn about(self) -> &'static str {
+        match self {
+            Integrator::VelocityVerlet => "second order, symplectic; the default",
+            Integrator::SymplecticEuler => "first order, symplectic (kick, then drift)",
+            Integrator::Yoshida4 => "fourth order, symplectic (three Verlet steps)",
+            Integrator::Rk4 => "fourth order, not symplectic (the baseline)",
+            Integrator::Boris => "second order; rotates velocities in magnetic fields (|v| kept exactly)",
+            Integrator::Rattle => "velocity Verlet keeping distance constraints (SHAKE/RATTLE)",
+            Integrator::ActionDescent => "the discrete action over a window, made stationary by descent",
         }
     }
 
-    fn repeat<F>(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64, one: F) -> Result<(), Singularity>
-    where
-        F: Fn(&mut VelocityVerlet, &LagrangianGraph, &mut State, f64) -> Result<(), Singularity>,
-    {
+    /// The order of the error in dt, as the theory gives it (`lagra bench precision` measures it).
+    pub fn order(self) -> u32 {
+        match self {
+            Integrator::SymplecticEuler => 1,
+            Integrator::Yoshida4 | Integrator::Rk4 => 4,
+            _ => 2,
+        }
+    }
+
+    /// The `solver` fields this integrator reads beyond `integrator`, `dt`, `steps`,
+    /// `duration` and `steps_per_frame`.
+    pub fn settings(self) -> &'static [&'static str] {
+        match self {
+            Integrator::Rattle => &["tol", "iterations"],
+            Integrator::ActionDescent => &["window", "iterations", "tol"],
+            _ => &[],
+        }
+    }
+
+    /// The settings it uses when the scene gives none.
+    pub fn defaults(self) -> Settings {
+        match self {
+            Integrator::ActionDescent => Settings { tol: 1e-12, iterations: 1000, window: 16 },
+            _ => Settings { tol: 1e-10, iterations: 1000, window: 1 },
+        }
+    }
+
+    /// The integrator a scene gets when its solver block names none: one that handles it.
+    pub fn default_for(constrained: bool) -> Integrator {
+        if constrained {
+            Integrator::Rattle
+        } else {
+            Integrator::VelocityVerlet
+        }
+    }
+
+    /// Whether this integrator can advance a model of these terms (and constraints, if
+    /// `constrained`): constraints need RATTLE; Boris rotates by the gyroscopic terms but kicks
+    /// with the rest, so no other may depend on velocities; the discrete action here is that of
+    /// L = T − V. `Err` names the term that cannot be handled (by its index), or none for the
+    /// constraints.
+    pub fn handles(self, terms: &[TermInstance], constrained: bool) -> Result<(), (Option<usize>, String)> {
+        let name = self.name();
+        if constrained && self != Integrator::Rattle {
+            return Err((None, format!("{name} cannot keep constraints: use `rattle`")));
+        }
+        let gyroscopic = |t: &TermInstance| {
+            let site = lagra_checker::terms::Site { x: [0.0; 3], v: [0.0; 3], m: 1.0, q: 1.0, colour: [0.0; 2] };
+            let sites = vec![&site; t.kind.spec().shape.arity()];
+            t.kind.gyroscopic(&t.params, &sites).is_some()
+        };
+        for (n, t) in terms.iter().enumerate() {
+            let kind = t.kind.spec().keyword;
+            match self {
+                Integrator::Boris if t.dissipates() => {
+                    return Err((
+                        Some(n),
+                        format!("boris rotates velocities only for magnetic fields; `{kind}` is dissipative: use velocity_verlet"),
+                    ))
+                }
+                Integrator::ActionDescent if t.dissipates() || gyroscopic(t) => {
+                    return Err((
+                        Some(n),
+                        format!("action_descent makes the action of L = T − V stationary; `{kind}` depends on velocities: use velocity_verlet"),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why a step could not be taken.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Failure {
+    /// A force is undefined at the state reached.
+    Singular(Singularity),
+    /// An iteration inside the step did not reach its tolerance.
+    Unconverged(String),
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Failure::Singular(s) => s.fmt(f),
+            Failure::Unconverged(m) => f.write_str(m),
+        }
+    }
+}
+
+impl From<Singularity> for Failure {
+    fn from(s: Singularity) -> Failure {
+        Failure::Singular(s)
+    }
+}
+
+impl From<Unconverged> for Failure {
+    fn from(u: Unconverged) -> Failure {
+        Failure::Unconverged(u.to_string())
+    }
+}
+
+/// The forces at the current state and the potential energy there (the f64 witness).
+#[derive(Clone, Debug)]
+pub struct Evaluated {
+    pub f: Vec<[f64; 3]>,
+    pub potential: f64,
+}
+
+impl Evaluated {
+    pub fn at(g: &LagrangianGraph, s: &State) -> Result<Evaluated, Singularity> {
+        let mut f = vec![[0.0; 3]; s.x.len()];
+        let potential = g.forces(s, &mut f)?;
+        Ok(Evaluated { f, potential })
+    }
+}
+
+/// How an iterating solver's iterations went, for the report.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Iterations {
+    /// What iterated (`SHAKE/RATTLE sweeps`, `action windows`).
+    pub what: &'static str,
+    pub tol: f64,
+    /// Solves (steps, or windows) and the iterations they took.
+    pub solves: u64,
+    pub iterations: u64,
+    pub most_iterations: u32,
+    /// The largest final residual of any solve, relative (the tolerance it was held to: `tol`).
+    pub worst_residual: f64,
+    /// Each action window: its first step, iterations and final residual.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub windows: Vec<Window>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Window {
+    pub first_step: u64,
+    pub iterations: u32,
+    pub residual: f64,
+}
+
+impl Iterations {
+    fn record(&mut self, iterations: u32, residual: f64) {
+        self.solves += 1;
+        self.iterations += iterations as u64;
+        self.most_iterations = self.most_iterations.max(iterations);
+        self.worst_residual = self.worst_residual.max(residual);
+    }
+}
+
+/// One integrator at work.
+pub trait Solver {
+    /// One step of `dt` (positions and velocities; the caller ticks the clock).
+    fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure>;
+    /// The forces and potential at the current state.
+    fn evaluated(&self) -> &Evaluated;
+    /// Steps until the state is at step `until`, stopping early after a step whose potential is
+    /// not finite (the run must stop there). A solver with a faster way to the same bits
+    /// overrides it.
+    fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Failure> {
         while s.step < until {
-            one(&mut self.vv, g, s, dt)?;
+            self.step(g, s, dt)?;
             tick(s, dt);
-            if !self.vv.potential.is_finite() {
+            if !self.evaluated().potential.is_finite() {
                 break;
             }
         }
         Ok(())
     }
+    /// How the iterations inside its steps went, for a solver that iterates.
+    fn iterations(&self) -> Option<&Iterations> {
+        None
+    }
+}
+
+/// The integrator a scene chose, at work on a graph.
+pub struct Stepper {
+    solver: Box<dyn Solver + Send>,
+}
+
+impl Stepper {
+    pub fn new(
+        integrator: Integrator,
+        settings: Settings,
+        g: &LagrangianGraph,
+        s: &State,
+    ) -> Result<Self, Singularity> {
+        let at = Evaluated::at(g, s)?;
+        let tol = Tolerance { tol: settings.tol, sweeps: settings.iterations };
+        let solver: Box<dyn Solver + Send> = match integrator {
+            Integrator::VelocityVerlet => Box::new(velocity_verlet::VelocityVerlet { at }),
+            Integrator::SymplecticEuler => Box::new(symplectic_euler::SymplecticEuler { at }),
+            Integrator::Yoshida4 => Box::new(yoshida::Yoshida4 { vv: velocity_verlet::VelocityVerlet { at } }),
+            Integrator::Rk4 => Box::new(rk4::Rk4 { at }),
+            Integrator::Boris => Box::new(boris::Boris::new(g, s, at)?),
+            Integrator::Rattle => Box::new(rattle::Rattle::new(g, at, tol)),
+            Integrator::ActionDescent => Box::new(action_descent::ActionDescent::new(at, settings)),
+        };
+        Ok(Stepper { solver })
+    }
+
+    /// One step of `dt`: the state's step counter and clock advance with it (t = step·dt).
+    pub fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
+        self.advance_to(g, s, dt, s.step + 1)
+    }
+
+    /// Steps until the state is at step `until`; the steps in between are seen by no one, so
+    /// nothing else runs between them. A failure is an error at the step it arises (the state's
+    /// counter is then at the step before); the potential energy is that of the state reached.
+    pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Failure> {
+        self.solver.advance_to(g, s, dt, until)
+    }
 
     /// The forces at the current state.
     pub fn forces(&self) -> &[[f64; 3]] {
-        &self.vv.f
+        &self.solver.evaluated().f
     }
 
     /// The potential energy at the current state (the f64 witness).
     pub fn potential(&self) -> f64 {
-        self.vv.potential
+        self.solver.evaluated().potential
+    }
+
+    /// How the iterations inside the steps went (RATTLE, action descent).
+    pub fn iterations(&self) -> Option<&Iterations> {
+        self.solver.iterations()
     }
 }
 
-/// The step counter and the clock after one step.
-fn tick(s: &mut State, dt: f64) {
-    set_step(s, s.step + 1, dt);
+/// v = v₀ + h·F(x, v)/m for a velocity-dependent F, solved by fixed-point iteration from
+/// v = v₀ + h·F(x, v₀)/m to a bitwise fixed point (the explicit kick and at most eight more
+/// rounds), `project`
+/// applied after every kick; `e` holds F(x, v) at the end. A contraction of factor h·γ/m: at any
+/// dt the integrator is otherwise stable at, a few rounds reach the last bit.
+fn implicit_kick(
+    g: &LagrangianGraph,
+    s: &mut State,
+    e: &mut Evaluated,
+    h: f64,
+    mut project: impl FnMut(&mut State) -> Result<(), Failure>,
+) -> Result<(), Failure> {
+    let start = s.v.clone();
+    for _ in 0..FIXED_POINT {
+        e.potential = g.forces(s, &mut e.f)?;
+        let guess = std::mem::replace(&mut s.v, start.clone());
+        g.kick(&mut s.v, &e.f, h);
+        project(s)?;
+        if s.v == guess {
+            break;
+        }
+    }
+    Ok(())
 }
 
-/// The step counter and the clock at `step` (t = step·dt, never accumulated).
-fn set_step(s: &mut State, step: u64, dt: f64) {
-    s.step = step;
-    s.t = step as f64 * dt;
-}
+const FIXED_POINT: usize = 9;
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use lagra_checker::model::{Body, Model, TermInstance, UnitSystem};
-    use lagra_checker::terms::Kind;
-
-    /// A harmonic pair (k = 4, μ = ½: ω = √8) released from a stretch of 0.3: the separation is
-    /// r₀ + 0.3 cos ωt exactly. The error at t = 2 for the given dt.
-    fn error(integrator: Integrator, dt: f64) -> f64 {
-        let model = Model {
-            units: UnitSystem::Reduced,
-            cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] }; 2],
-            terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![4.0, 1.0, 0.0] }],
-        };
-        let g = LagrangianGraph::new(&model);
-        let mut s = State { step: 0, t: 0.0, x: vec![[0.0; 3], [1.3, 0.0, 0.0]], v: vec![[0.0; 3]; 2] };
-        let mut st = Stepper::new(integrator, &g, &s).unwrap();
-        let steps = (2.0 / dt).round() as u64;
-        for _ in 0..steps {
-            st.step(&g, &mut s, dt).unwrap();
-        }
-        let exact = 1.0 + 0.3 * (8f64.sqrt() * s.t).cos();
-        (s.x[1][0] - s.x[0][0] - exact).abs()
-    }
-
-    /// The measured order of convergence between dt and dt/2.
-    fn order(integrator: Integrator, dt: f64) -> f64 {
-        (error(integrator, dt) / error(integrator, dt / 2.0)).log2()
-    }
-
-    #[test]
-    fn verlet_converges_at_second_order() {
-        let p = order(Integrator::VelocityVerlet, 0.01);
-        assert!((p - 2.0).abs() <= 0.3, "order {p}");
-    }
-
-    #[test]
-    fn yoshida_converges_at_fourth_order() {
-        let p = order(Integrator::Yoshida4, 0.02);
-        assert!((p - 4.0).abs() <= 0.3, "order {p}");
-    }
-
-    #[test]
-    fn rk4_converges_at_fourth_order() {
-        let p = order(Integrator::Rk4, 0.02);
-        assert!((p - 4.0).abs() <= 0.3, "order {p}");
-    }
-}
+mod tests;

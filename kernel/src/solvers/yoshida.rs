@@ -3,8 +3,8 @@
 //! Verlet steps, it keeps their symmetries: linear and angular momentum exactly conserved in
 //! exact arithmetic, energy error bounded, now O(dt⁴).
 
-use super::VelocityVerlet;
-use crate::forces::Singularity;
+use super::velocity_verlet::VelocityVerlet;
+use super::{Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 
@@ -12,9 +12,19 @@ const CBRT2: f64 = 1.259_921_049_894_873_2;
 const W1: f64 = 1.0 / (2.0 - CBRT2);
 const W0: f64 = -CBRT2 / (2.0 - CBRT2);
 
-pub fn advance(vv: &mut VelocityVerlet, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Singularity> {
-    for w in [W1, W0, W1] {
-        vv.advance(g, s, w * dt)?;
+pub struct Yoshida4 {
+    pub vv: VelocityVerlet,
+}
+
+impl Solver for Yoshida4 {
+    fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
+        for w in [W1, W0, W1] {
+            self.vv.step(g, s, w * dt)?;
+        }
+        Ok(())
     }
-    Ok(())
+
+    fn evaluated(&self) -> &Evaluated {
+        &self.vv.at
+    }
 }
