@@ -44,6 +44,19 @@ enum Study {
         #[arg(long)]
         json: bool,
     },
+    /// The cost of a gradient: the reverse-mode gradient of energy@end with respect to the LJ
+    /// parameters against the forward run alone, on the 256-atom liquid and the 32,000-atom
+    /// benchmark, interleaved in one process (the fastest of --repeats of each).
+    Gradient {
+        /// Timings of each; the fastest counts.
+        #[arg(long, default_value_t = 3)]
+        repeats: u32,
+        /// Only the 256-atom liquid (a smoke run).
+        #[arg(long)]
+        quick: bool,
+        #[arg(long)]
+        json: bool,
+    },
     /// What compensated summation buys: the energy and momentum witnesses of the 32,000-atom LJ
     /// benchmark summed plainly, compensated (Neumaier) and exactly, at the start and after
     /// --steps steps.
@@ -297,6 +310,7 @@ pub fn main(a: Args) -> ExitCode {
     let result = match a.study {
         Study::Precision { out, quick } => precision(&out, quick),
         Study::Overhead { steps, repeats, json } => overhead(steps, repeats, json),
+        Study::Gradient { repeats, quick, json } => gradient_cost(repeats, quick, json),
         Study::Summation { steps, json } => crate::summation::study(steps).and_then(|s| {
             if json {
                 serde_json::to_string_pretty(&s).map(|t| t + "\n").map_err(|e| e.to_string())
@@ -367,6 +381,80 @@ fn precision(out: &PathBuf, quick: bool) -> Result<String, String> {
         }
     }
     Ok(format!("observed orders (slope of log error against log dt):\n{md}wrote precision.csv, precision.svg, precision.md in {}\n", out.display()))
+}
+
+/// One row of `lagra bench gradient`.
+#[derive(serde::Serialize)]
+struct GradientCost {
+    system: String,
+    bodies: usize,
+    steps: u64,
+    forward_s: f64,
+    reverse_s: f64,
+    ratio: f64,
+    states_kept: usize,
+    /// The states the reverse pass keeps at once (positions, velocities, forces), in bytes.
+    state_bytes: usize,
+}
+
+fn gradient_cost(repeats: u32, quick: bool, json: bool) -> Result<String, String> {
+    use lagra_kernel::grad::{gradient, objective_value, params, Method, Objective, Request};
+    let root = env!("CARGO_MANIFEST_DIR");
+    let mut systems = vec![("lj_liquid", format!("{root}/scenes/lj_liquid.lagra"), 1000u64, "lj_shifted")];
+    if !quick {
+        systems.push(("lj_32k", format!("{root}/scenes/bench/lj_32k.lagra"), 100, "lj"));
+    }
+    let mut rows = vec![];
+    for (name, path, steps, term) in systems {
+        let text = std::fs::read_to_string(&path).map_err(|e| format!("{path}: {e}"))?;
+        let mut scene = compile(&text).map_err(|d| d.render(&path, &text).to_string())?;
+        scene.solver.steps = steps;
+        let objective = Objective::parse("energy@end", &scene)?;
+        let wrt = params::parse_list(&format!("{term}.epsilon,{term}.sigma"), &scene)?;
+        let (mut forward, mut reverse, mut kept) = (f64::INFINITY, f64::INFINITY, 0);
+        for _ in 0..repeats.max(1) {
+            let t = Instant::now();
+            std::hint::black_box(objective_value(&scene, &objective, 1)?);
+            forward = forward.min(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            let g = gradient(
+                Request { scene: &scene, objective: &objective, wrt: &wrt, threads: 1, progress: None },
+                Method::Reverse,
+            )?;
+            reverse = reverse.min(t.elapsed().as_secs_f64());
+            kept = g.states_kept;
+        }
+        let bodies = scene.x0.len();
+        rows.push(GradientCost {
+            system: name.into(),
+            bodies,
+            steps,
+            forward_s: forward,
+            reverse_s: reverse,
+            ratio: reverse / forward,
+            states_kept: kept,
+            state_bytes: kept * bodies * 72,
+        });
+    }
+    if json {
+        return serde_json::to_string_pretty(&rows).map(|t| t + "\n").map_err(|e| e.to_string());
+    }
+    let mut out = String::from("| system | bodies | steps | forward run | reverse gradient | ratio | states kept | their memory |\n|---|---|---|---|---|---|---|---|\n");
+    for r in &rows {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {:.3} s | {:.3} s | {:.2} | {} | {:.1} MB |",
+            r.system,
+            r.bodies,
+            r.steps,
+            r.forward_s,
+            r.reverse_s,
+            r.ratio,
+            r.states_kept,
+            r.state_bytes as f64 / 1e6
+        );
+    }
+    Ok(out)
 }
 
 /// The oscillator of `OSCILLATOR` by hand: the loop a person would write for two beads and one

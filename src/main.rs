@@ -2,9 +2,11 @@
 
 mod bench;
 mod check;
+mod grad;
 mod lean;
 mod list;
 mod noether;
+mod progress;
 mod report;
 mod run;
 mod summation;
@@ -48,6 +50,12 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
     Noether(noether::Args),
     /// Studies of speed and accuracy (`lagra bench precision`: run time against error).
     Bench(bench::Args),
+    /// The exact gradient of an objective of the run with respect to the scene's parameters
+    /// (reverse mode through every velocity Verlet step).
+    Grad(grad::GradArgs),
+    /// Fit parameters to a trace: L-BFGS on the mean squared distance of the positions, with
+    /// exact gradients.
+    Fit(grad::FitArgs),
 }
 
 fn main() -> ExitCode {
@@ -59,5 +67,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::main(args),
         Command::Lean(args) => lean::main(args),
         Command::Noether(args) => noether::main(args),
+        Command::Grad(args) => grad::grad(args),
+        Command::Fit(args) => grad::fit(args),
     }
 }

@@ -1,5 +1,6 @@
 //! `lagra run FILE`.
 
+use crate::progress::{Progress, When};
 use crate::{noether, report};
 use lagra_checker::certificate::{self, Certificate};
 use lagra_checker::checksum::label;
@@ -11,10 +12,9 @@ use lagra_kernel::run::{run, Options};
 use lagra_kernel::solvers::Integrator;
 use sha2::{Digest, Sha256};
 use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -68,57 +68,6 @@ pub fn after_help() -> String {
 Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or was UNDECIDED, a prediction \
 disagreed or could not be measured, or the run halted (a singular force, an iteration that did not converge, a \
 non-finite state); 2 bad input (the scene, a file, an argument)."
-}
-
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum When {
-    Auto,
-    Always,
-    Never,
-}
-
-/// The progress line: on a terminal one line rewritten in place (from a second into the run,
-/// twice a second), elsewhere (`always`) a line per report.
-struct Progress {
-    planned: u64,
-    terminal: bool,
-    start: Instant,
-    shown: Option<Instant>,
-}
-
-impl Progress {
-    fn new(when: When, planned: u64) -> Option<Progress> {
-        let terminal = std::io::stderr().is_terminal();
-        let on = when == When::Always || (when == When::Auto && terminal);
-        on.then(|| Progress { planned, terminal, start: Instant::now(), shown: None })
-    }
-
-    fn at(&mut self, step: u64) {
-        let (now, elapsed) = (Instant::now(), self.start.elapsed().as_secs_f64());
-        let due = self.shown.is_none_or(|t| now - t >= Duration::from_millis(500));
-        if !due || (self.terminal && elapsed < 1.0) {
-            return;
-        }
-        let mut line =
-            format!("step {step}/{} ({:.0}%), {elapsed:.1} s", self.planned, 100.0 * step as f64 / self.planned as f64);
-        // an estimate from the first half second would be mostly start-up
-        if elapsed >= 0.5 {
-            line += &format!(", about {:.0} s left", elapsed * (self.planned - step) as f64 / step.max(1) as f64);
-        }
-        if self.terminal {
-            eprint!("\r{line}\x1b[K");
-        } else {
-            eprintln!("lagra: {line}");
-        }
-        self.shown = Some(now);
-    }
-
-    /// Clears a terminal's line before the report.
-    fn done(&self) {
-        if self.terminal && self.shown.is_some() {
-            eprint!("\r\x1b[K");
-        }
-    }
 }
 
 /// Bad input: the message on stderr, exit code 2.

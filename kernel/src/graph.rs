@@ -7,7 +7,8 @@
 //! the constraints — and each solver (`solvers/`) is a short program over them.
 
 use crate::constraints::{Constraints, Swept, Tolerance, Unconverged};
-use crate::forces::{group, Force, Frame, Parts, Pool, Singularity};
+use crate::forces::derivative::{Adjoint, Direction, Wanted};
+use crate::forces::{group, Force, Frame, Kept, Parts, Pool, Singularity};
 use crate::state::State;
 use crate::step::{self, Stride};
 use crate::sum::Sum;
@@ -60,7 +61,7 @@ impl LagrangianGraph {
     fn with_pool(model: &Model, pool: Pool) -> Self {
         let mut groups = vec![];
         for &kind in Kind::ALL {
-            let instances: Vec<_> = model.terms.iter().filter(|t| t.kind == kind).collect();
+            let instances: Vec<_> = model.terms.iter().enumerate().filter(|t| t.1.kind == kind).collect();
             if !instances.is_empty() {
                 groups.push((kind, group(kind, &instances, model, &pool)));
             }
@@ -169,6 +170,45 @@ impl LagrangianGraph {
             None => Ok(Swept { sweeps: 0, error: 0.0 }),
             Some(c) => c.velocities(&s.x, &mut s.v, &self.inverse_masses, dt, tol),
         }
+    }
+
+    /// The derivative of the forces along `dir` (positions, velocities, masses, charges,
+    /// parameters), into `df`: from the terms' definitions.
+    pub fn tangent(&self, s: &State, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        df.iter_mut().for_each(|d| *d = [0.0; 3]);
+        let frame = self.frame_parts().frame(s);
+        self.groups.iter().try_for_each(|(_, g)| g.tangent(&frame, dir, df))
+    }
+
+    /// Adds the forces' derivatives, transposed, applied to `g`, to `out`.
+    pub fn pullback(&self, s: &State, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let frame = self.frame_parts().frame(s);
+        self.groups.iter().try_for_each(|(_, k)| k.pullback(&frame, g, wanted, out))
+    }
+
+    /// Adds the gradient of the potential energy to `out`.
+    pub fn potential_pullback(&self, s: &State, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let frame = self.frame_parts().frame(s);
+        self.groups.iter().try_for_each(|(_, k)| k.potential_pullback(&frame, wanted, out))
+    }
+
+    /// What the groups keep between evaluations (their neighbour lists), saved: a replay that
+    /// starts from a saved state with them (`resume`) is the same bits as the run.
+    pub fn keep(&self) -> Vec<Option<Kept>> {
+        self.groups.iter().map(|(_, g)| g.save()).collect()
+    }
+
+    pub fn resume(&self, kept: &[Option<Kept>]) {
+        for ((_, g), k) in self.groups.iter().zip(kept) {
+            if let Some(k) = k {
+                g.restore(k);
+            }
+        }
+    }
+
+    /// How many times the kept lists have been built, in all (it changes when one is rebuilt).
+    pub fn builds(&self) -> u64 {
+        self.groups.iter().map(|(_, g)| g.builds()).sum()
     }
 
     fn evaluate(&self, s: &State, f: &mut [[f64; 3]], energy: bool, which: Which) -> Result<f64, Singularity> {

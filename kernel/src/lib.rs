@@ -4,7 +4,9 @@
 
 pub mod checking;
 pub mod constraints;
+pub mod derivatives;
 pub mod forces;
+pub mod grad;
 pub mod graph;
 pub mod lang;
 pub mod neighbours;

@@ -42,6 +42,7 @@ impl Pair {
     }
 }
 
+#[derive(Clone)]
 pub struct Neighbours {
     pub reach: f64,
     pub skin: f64,

@@ -122,7 +122,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         Model { units: UnitSystem::Reduced, cell: None, bodies, terms: vec![term.clone()], constraints: vec![] };
 
     let mut fast = vec![[0.0; 3]; n];
-    let energy = group(kind, &[&term], &model, &None)
+    let energy = group(kind, &[(0, &term)], &model, &None)
         .accumulate(&Frame { x: &x, v: &v, m: &m, q: &q, c: &colour }, &mut fast, true)
         .expect("no singularity");
 

@@ -1,5 +1,6 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
+use super::derivative::{bond_positions, coincident, Adjoint, Direction, Instance, PairDerivative, Wanted};
 use super::{stride_alone, sub, Bonded, Field, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::neighbours::{Neighbours, Pair};
 use crate::step::Stride;
@@ -56,8 +57,8 @@ struct Rows {
 }
 
 impl Rows {
-    fn new(kind: Kind, t: &[&TermInstance]) -> Rows {
-        Rows { params: t.iter().flat_map(|t| t.params.iter().copied()).collect(), w: kind.spec().width(), n: t.len() }
+    fn new(kind: Kind, t: &[(usize, &TermInstance)]) -> Rows {
+        Rows { params: t.iter().flat_map(|t| t.1.params.iter().copied()).collect(), w: kind.spec().width(), n: t.len() }
     }
     fn iter(&self) -> impl Iterator<Item = &[f64]> {
         (0..self.n).map(|k| self.row(k))
@@ -69,6 +70,9 @@ impl Rows {
 
 pub struct Bonds<T, const N: usize> {
     name: &'static str,
+    kind: Kind,
+    /// Each instance's place in the model.
+    terms: Vec<usize>,
     sites: Vec<[usize; N]>,
     rows: Rows,
     /// In a periodic cell, its image rule.
@@ -78,12 +82,13 @@ pub struct Bonds<T, const N: usize> {
 }
 
 impl<T: Bonded<N> + Send + Sync + 'static, const N: usize> Bonds<T, N> {
-    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model) -> Box<dyn Force> {
+    pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model) -> Box<dyn Force> {
         let rows = Rows::new(kind, t);
         let velocity = (0..t.len()).any(|k| T::velocity_dependent(rows.row(k)));
-        let sites = t.iter().map(|t| std::array::from_fn(|i| t.sites[i])).collect();
+        let sites = t.iter().map(|t| std::array::from_fn(|i| t.1.sites[i])).collect();
         let images = m.cell.map(|c| Images::of(&Some(c)));
-        Box::new(Bonds::<T, N> { name: kind.name(), sites, rows, images, velocity, term: PhantomData })
+        let terms = t.iter().map(|t| t.0).collect();
+        Box::new(Bonds::<T, N> { name: kind.name(), kind, terms, sites, rows, images, velocity, term: PhantomData })
     }
 }
 
@@ -129,10 +134,39 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     fn plan(&self) -> String {
         format!("{} listed instance(s), in order", self.sites.len())
     }
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        (0..self.sites.len()).for_each(|k| self.instance(k, s).tangent(s, dir, df));
+        Ok(())
+    }
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        for k in 0..self.sites.len() {
+            self.instance(k, s).pullback(s, g, wanted.of(self.terms[k]), out);
+        }
+        Ok(())
+    }
+    fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        for k in 0..self.sites.len() {
+            self.instance(k, s).potential_pullback(s, wanted.of(self.terms[k]), out);
+        }
+        Ok(())
+    }
+}
+
+impl<T, const N: usize> Bonds<T, N> {
+    /// Instance k as its definition sees it (the bodies at their nearest images).
+    fn instance<'a>(&'a self, k: usize, s: &Frame) -> Instance<'a> {
+        let x = bond_positions(s.x, &self.sites[k], &self.images);
+        Instance { kind: self.kind, p: self.rows.row(k), bodies: &self.sites[k], x, term: self.terms[k] }
+    }
 }
 
 pub struct Pairs<T: Paired> {
     name: &'static str,
+    kind: Kind,
+    /// Each instance's place in the model, and its parameters as written (the derivatives
+    /// evaluate the definition on them).
+    terms: Vec<usize>,
+    params: Rows,
     /// Each instance's constants (`Paired::row`).
     rows: Vec<T::Row>,
     cell: Option<Cell>,
@@ -155,15 +189,18 @@ const SPLIT_FROM: usize = 4096;
 const CHUNKS: usize = 4;
 
 impl<T: Paired + Send + Sync + 'static> Pairs<T> {
-    pub fn boxed(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
-        let reach = t.iter().map(|t| kind.reach(&t.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
+    pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
+        let reach = t.iter().map(|t| kind.reach(&t.1.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
         let list = reach
             .filter(|_| (LIST_FROM..Pair::BODIES).contains(&m.bodies.len()))
             .and_then(|r| Neighbours::new(&m.cell, r))
             .map(Mutex::new);
-        let rows = t.iter().map(|t| T::row(&t.params)).collect();
+        let rows = t.iter().map(|t| T::row(&t.1.params)).collect();
         Box::new(Pairs::<T> {
             name: kind.name(),
+            kind,
+            terms: t.iter().map(|t| t.0).collect(),
+            params: Rows::new(kind, t),
             rows,
             cell: m.cell,
             reach,
@@ -262,6 +299,117 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         Ok(energy.value())
     }
 
+    /// Each instance's derivative, gathering what `wanted` names.
+    fn derivatives_for(&self, wanted: &Wanted) -> Vec<PairDerivative<'_>> {
+        (0..self.terms.len())
+            .map(|k| {
+                let t = self.terms[k];
+                PairDerivative::new(self.kind, self.params.row(k), t, wanted.of(t))
+            })
+            .collect()
+    }
+
+    fn derivatives(&self, w: (&[usize], bool, bool)) -> Vec<PairDerivative<'_>> {
+        (0..self.terms.len()).map(|k| PairDerivative::new(self.kind, self.params.row(k), self.terms[k], w)).collect()
+    }
+
+    /// Whether every instance has a hand-derived jet (and the term reads no masses or charges,
+    /// whose derivatives jets leave out).
+    fn jets_everywhere(&self, each: &[PairDerivative]) -> bool {
+        !T::BODIES
+            && !T::COLOUR
+            && each.iter().enumerate().all(|(k, pd)| T::jet(&self.rows[k], pd.p, 0.25 * pd.reach2.min(1e300)).is_some())
+    }
+
+    /// The pullback through the Verlet list with the hand-derived jets, laid out as the force
+    /// loop is (`listed`): the covectors gathered into the list's order, each body's adjoint
+    /// summed in a register over its pairs, the parameters' in one sum per instance.
+    fn listed_pullback(&self, l: &Neighbours, g: &[[f64; 3]], each: &[PairDerivative], out: &mut Adjoint) {
+        let x = &l.wrapped;
+        let gl: Vec<[f64; 3]> = l.bodies.iter().map(|&b| g[b as usize]).collect();
+        let mut xl = vec![[0.0; 3]; gl.len()];
+        for (k, pd) in each.iter().enumerate() {
+            let (row, p) = (&self.rows[k], pd.p);
+            let wanted: Vec<usize> = pd.which().iter().copied().filter(|&w| w < p.len()).collect();
+            let mut params = [0.0; 3];
+            for i in 0..gl.len() {
+                let (xi, gi) = (x[i], gl[i]);
+                let mut acc = [0.0; 3];
+                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
+                    let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
+                    let d = [x[j][0] - xi[0] + sh[0], x[j][1] - xi[1] + sh[1], x[j][2] - xi[2] + sh[2]];
+                    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    if r2 >= pd.reach2 {
+                        continue;
+                    }
+                    let Some(jet) = T::jet(row, p, r2) else { continue };
+                    let dg = [gi[0] - gl[j][0], gi[1] - gl[j][1], gi[2] - gl[j][2]];
+                    let a = dg[0] * d[0] + dg[1] * d[1] + dg[2] * d[2];
+                    for c in 0..3 {
+                        let w = jet.s * dg[c] + jet.s_r * a * d[c];
+                        xl[j][c] += w;
+                        acc[c] -= w;
+                    }
+                    for &w in &wanted {
+                        params[w] += jet.ds[w] * a;
+                    }
+                }
+                (0..3).for_each(|c| xl[i][c] += acc[c]);
+            }
+            for &w in &wanted {
+                out.params[pd.term][w] += params[w];
+            }
+        }
+        for (&b, a) in l.bodies.iter().zip(&xl) {
+            (0..3).for_each(|c| out.x[b as usize][c] += a[c]);
+        }
+    }
+
+    /// Instance k's hand-derived jet at d, for a term that reads neither masses nor charges
+    /// (whose jets say nothing of them) and a pair inside its own reach.
+    #[inline]
+    fn jet(&self, k: usize, d: &[f64; 3], reach2: f64) -> Option<super::Jet> {
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if T::BODIES || T::COLOUR || r2 >= reach2 {
+            return None;
+        }
+        T::jet(&self.rows[k], self.params.row(k), r2)
+    }
+
+    /// Each pair within reach, as the force loop sees it — through the Verlet list when there is
+    /// one (brought up to date), else every pair or a cell list — with its displacement.
+    fn within_reach(
+        &self,
+        s: &Frame,
+        mut visit: impl FnMut(usize, usize, [f64; 3]) -> Result<(), Singularity>,
+    ) -> Result<(), Singularity> {
+        let near = |d: &[f64; 3]| {
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            self.reach.is_none_or(|r| r2 <= r * r)
+        };
+        let Some(list) = &self.list else {
+            return traverse::pairs(
+                s.x,
+                &self.cell,
+                self.reach,
+                |i, j, d| if near(&d) { visit(i, j, d) } else { Ok(()) },
+            );
+        };
+        let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        l.update(s.x, &self.cell, self.pool.as_deref());
+        let x = &l.wrapped;
+        for i in 0..l.bodies.len() {
+            for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
+                let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
+                let d = [x[j][0] - x[i][0] + sh[0], x[j][1] - x[i][1] + sh[1], x[j][2] - x[i][2] + sh[2]];
+                if near(&d) {
+                    visit(l.bodies[i] as usize, l.bodies[j] as usize, d)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Every pair a traversal visits (all pairs, or a cell list rebuilt now), each result
     /// checked finite as it comes.
     fn traversed(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
@@ -349,10 +497,69 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             }
         }
     }
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        let each = self.derivatives((&[], false, false));
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            for (k, pd) in each.iter().enumerate() {
+                let f = pd.tangent(self.jet(k, &d, pd.reach2), s, dir, i, j, d);
+                for c in 0..3 {
+                    df[i][c] += f[c];
+                    df[j][c] -= f[c];
+                }
+            }
+            Ok(())
+        })
+    }
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let each = self.derivatives_for(wanted);
+        if let Some(list) = self.list.as_ref().filter(|_| self.jets_everywhere(&each)) {
+            let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            l.update(s.x, &self.cell, self.pool.as_deref());
+            self.listed_pullback(&l, g, &each, out);
+            return Ok(());
+        }
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            for (k, pd) in each.iter().enumerate() {
+                pd.pullback(self.jet(k, &d, pd.reach2), s, g, i, j, d, out);
+            }
+            Ok(())
+        })
+    }
+    fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let each = self.derivatives_for(wanted);
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            each.iter().for_each(|pd| pd.potential_pullback(s, i, j, d, out));
+            Ok(())
+        })
+    }
+    fn save(&self) -> Option<super::Kept> {
+        let l = self.list.as_ref()?;
+        Some(Box::new(l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone()))
+    }
+    fn restore(&self, kept: &super::Kept) {
+        if let (Some(l), Some(saved)) = (&self.list, kept.downcast_ref::<Neighbours>()) {
+            *l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = saved.clone();
+        }
+    }
+    fn builds(&self) -> u64 {
+        self.list.as_ref().map_or(0, |l| l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).builds)
+    }
 }
 
 pub struct Fields<T> {
     name: &'static str,
+    kind: Kind,
+    /// Each instance's place in the model.
+    terms: Vec<usize>,
     rows: Rows,
     /// Per instance, the bodies it acts on (empty: every body).
     on: Vec<Vec<usize>>,
@@ -361,11 +568,33 @@ pub struct Fields<T> {
 }
 
 impl<T: Field + Send + Sync + 'static> Fields<T> {
-    pub fn boxed(kind: Kind, t: &[&TermInstance]) -> Box<dyn Force> {
+    pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)]) -> Box<dyn Force> {
         let rows = Rows::new(kind, t);
         let velocity = rows.iter().any(T::velocity_dependent);
-        let on = t.iter().map(|t| t.sites.clone()).collect();
-        Box::new(Fields::<T> { name: kind.name(), rows, on, velocity, term: PhantomData })
+        let on = t.iter().map(|t| t.1.sites.clone()).collect();
+        let terms = t.iter().map(|t| t.0).collect();
+        Box::new(Fields::<T> { name: kind.name(), kind, terms, rows, on, velocity, term: PhantomData })
+    }
+}
+
+impl<T> Fields<T> {
+    /// Each instance on each body it acts on, as its definition sees it.
+    fn each_instance(&self, s: &Frame, mut f: impl FnMut(Instance)) {
+        for k in 0..self.on.len() {
+            for i in self.bodies_of(k, s.x.len()) {
+                let bodies = std::slice::from_ref(&i);
+                f(Instance { kind: self.kind, p: self.rows.row(k), bodies, x: vec![s.x[i]], term: self.terms[k] });
+            }
+        }
+    }
+
+    /// The bodies instance k acts on.
+    fn bodies_of(&self, k: usize, n: usize) -> Vec<usize> {
+        if self.on[k].is_empty() {
+            (0..n).collect()
+        } else {
+            self.on[k].clone()
+        }
     }
 }
 
@@ -419,5 +648,17 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
     }
     fn plan(&self) -> String {
         format!("{} instance(s), each on its bodies in order", self.on.len())
+    }
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        self.each_instance(s, |one| one.tangent(s, dir, df));
+        Ok(())
+    }
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        self.each_instance(s, |one| one.pullback(s, g, wanted.of(one.term), out));
+        Ok(())
+    }
+    fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        self.each_instance(s, |one| one.potential_pullback(s, wanted.of(one.term), out));
+        Ok(())
     }
 }

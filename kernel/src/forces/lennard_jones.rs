@@ -2,7 +2,7 @@
 //! for the force-shifted one): V = 4ε(s¹² − s⁶), s = σ/r; the force on i is
 //! 24ε(s⁶ − 2s¹²)/r² · d.
 
-use super::Paired;
+use super::{Jet, Paired};
 
 /// One instance's constants: 4ε, 24ε, σ², the cutoff r_c (and r_c²), and what is taken off
 /// inside it: the energy shift, and for the force-shifted variant the slope V′(r_c).
@@ -41,6 +41,18 @@ impl Lj {
         let r = r2.sqrt();
         let (v, s) = self.at(r2);
         (v - self.shift - (r - self.rc) * self.slope, s - self.slope / r)
+    }
+
+    /// The plain term's radial derivatives at r² for parameters (ε, σ, ...): with u = (σ/r)⁶,
+    /// s = 24ε(u − 2u²)/r², s_r = 96ε(7u² − 2u)/r⁴, ∂s/∂ε = s/ε, ∂s/∂σ = 144ε(u − 4u²)/(σr²).
+    pub(crate) fn jet_at(&self, p: &[f64], r2: f64) -> Jet {
+        let (eps, sigma) = (p[0], p[1]);
+        let inv = 1.0 / r2;
+        let s2 = self.sigma2 * inv;
+        let u = s2 * s2 * s2;
+        let s = self.eps24 * (u - 2.0 * u * u) * inv;
+        let s_r = 96.0 * eps * (7.0 * u * u - 2.0 * u) * inv * inv;
+        Jet { s, s_r, ds: [s / eps, 144.0 * eps * (u - 4.0 * u * u) * inv / sigma, 0.0] }
     }
 
     /// The plain term and its derivative at r²: (V, dV/dr / r).
@@ -85,6 +97,9 @@ impl Paired for Plain {
     fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         lj.shifted(d)
     }
+    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+        Some(lj.jet_at(p, r2))
+    }
 }
 
 impl Paired for Shifted {
@@ -96,6 +111,10 @@ impl Paired for Shifted {
     #[inline(always)]
     fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         lj.shifted(d)
+    }
+    /// The shift is a constant: the force's derivatives are the plain term's.
+    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+        Some(lj.jet_at(p, r2))
     }
 }
 
@@ -109,6 +128,18 @@ impl Paired for ForceShifted {
     #[inline(always)]
     fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         cut(d, lj.rc2, |r2| lj.force_shifted_at(r2))
+    }
+    /// With V′(r_c) = r_c s(r_c) taken off the force: s − V′(r_c)/r, s_r + V′(r_c)/r³, and the
+    /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c).
+    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+        let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
+        let r = r2.sqrt();
+        let curvature = at_rc.s + lj.rc2 * at_rc.s_r;
+        Some(Jet {
+            s: here.s - lj.slope / r,
+            s_r: here.s_r + lj.slope / (r2 * r),
+            ds: [(here.s - lj.slope / r) / p[0], here.ds[1] - lj.rc * at_rc.ds[1] / r, -curvature / r],
+        })
     }
 }
 
@@ -130,6 +161,37 @@ mod tests {
         #[test]
         fn close_contact_is_finite(eps in 0.1f64..5.0, sigma in 0.5f64..2.0, tiny in 0.05f64..0.5, seed in any::<u64>()) {
             assert_matches_definition(Kind::LennardJonesShifted, &[eps, sigma, 2.5], seed, tiny);
+        }
+    }
+
+    /// The hand-derived jets are the definition's own radial derivatives.
+    #[test]
+    fn jets_are_the_definitions_derivatives() {
+        use super::{ForceShifted, Plain, Shifted};
+        use crate::derivatives::exact::{radial, radial_sensitivities};
+        use crate::forces::dual::Rng;
+        use crate::forces::{Jet, Paired};
+        fn holds<T: Paired>(kind: Kind, p: &[f64], r: f64) {
+            let jet: Jet = T::jet(&T::row(p), p, r * r).unwrap();
+            let exact = radial(kind, p, [1.0; 4], [[0.0; 2]; 2], r);
+            let ds = radial_sensitivities(kind, p, [1.0; 4], [[0.0; 2]; 2], r, &(0..p.len()).collect::<Vec<_>>());
+            let close = |a: f64, b: f64, what: &str| {
+                assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-8), "{kind:?} r {r} {what}: {a} vs {b}")
+            };
+            close(jet.s, exact.s, "s");
+            close(jet.s_r, exact.s_r, "s_r");
+            for (k, d) in ds.iter().enumerate() {
+                close(jet.ds[k], *d, &format!("ds[{k}]"));
+            }
+        }
+        let mut rng = Rng::new(3);
+        for _ in 0..200 {
+            let p = [rng.uniform(0.1, 5.0), rng.uniform(0.5, 2.0), rng.uniform(2.0, 6.0)];
+            let r = rng.uniform(0.7, 0.999) * p[2];
+            holds::<Plain>(Kind::LennardJones, &p, r);
+            holds::<Shifted>(Kind::LennardJonesShifted, &p, r);
+            holds::<ForceShifted>(Kind::LennardJonesForceShifted, &p, r);
+            holds::<crate::forces::wca::Fast>(Kind::Wca, &p[..2], rng.uniform(0.8, 1.12) * p[1]);
         }
     }
 

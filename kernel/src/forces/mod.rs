@@ -4,6 +4,7 @@
 //! checker's generic definitions; tests hold the two together (forces = −∇V − ∂F/∂v to
 //! round-off, energies equal).
 
+pub mod derivative;
 mod groups;
 
 mod contact_floor;
@@ -33,6 +34,7 @@ pub(crate) mod dual;
 
 use crate::state::State;
 use crate::step::Stride;
+use derivative::{Adjoint, Direction, Wanted};
 use groups::{Bonds, Fields, Pairs};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
@@ -103,9 +105,30 @@ pub trait Force: Send + Sync {
     }
     /// Adds the group's ω of each body to `w` (nothing for a group that is not gyroscopic).
     fn gyration(&self, _s: &Frame, _w: &mut [[f64; 3]]) {}
+    /// Adds the derivative of the group's forces along `dir` to `df`, from the definitions.
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity>;
+    /// Adds the transpose of the forces' derivatives applied to `g` (one covector per body) to
+    /// `out`: the adjoints of positions, velocities and of what `wanted` names.
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity>;
+    /// Adds the gradient of the group's potential energy to `out` (positions, and what `wanted`
+    /// names).
+    fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity>;
+    /// A copy of what the group keeps between evaluations (a neighbour list), so that a replay
+    /// from a saved state (`restore`) gives the same bits as the run that saved it.
+    fn save(&self) -> Option<Kept> {
+        None
+    }
+    fn restore(&self, _kept: &Kept) {}
+    /// How many times the group's kept list has been built.
+    fn builds(&self) -> u64 {
+        0
+    }
     /// How the group visits its bodies, in a line (`lagra run --explain`).
     fn plan(&self) -> String;
 }
+
+/// What a group keeps between evaluations, saved (`Force::save`).
+pub type Kept = Box<dyn std::any::Any + Send + Sync>;
 
 /// The threads a group may use: the run's own pool, never rayon's global one (`None`: one
 /// thread, no pool).
@@ -132,6 +155,22 @@ pub trait Paired {
     const BODIES: bool = false;
     const COLOUR: bool = false;
     fn eval(r: &Self::Row, d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str>;
+    /// The force's radial derivatives at r² inside the reach, hand-derived for the terms whose
+    /// gradients run over millions of pairs (`Jet`; `p` the instance's parameters as written).
+    /// `None`: the gradient code takes them from the definition (`derivatives::exact::radial`),
+    /// to which a test holds every hand-derived one.
+    fn jet(_r: &Self::Row, _p: &[f64], _r2: f64) -> Option<Jet> {
+        None
+    }
+}
+
+/// s = V′(r)/r (the force on i is s·d), s_r = (V″ − s)/r² (so δs = s_r·(d·δd)) and ∂s/∂p for
+/// each parameter p of the instance (at most three).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jet {
+    pub s: f64,
+    pub s_r: f64,
+    pub ds: [f64; 3],
 }
 
 /// The force on one body and its energy, from its position, velocity, mass and charge.
@@ -148,8 +187,9 @@ pub trait Field {
     }
 }
 
-/// The group for all instances of one kind: one line per term kind.
-pub fn group(kind: Kind, t: &[&TermInstance], m: &Model, pool: &Pool) -> Box<dyn Force> {
+/// The group for all instances of one kind (each with its place in the model): one line per
+/// term kind.
+pub fn group(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
     match kind {
         Kind::HarmonicBond => Bonds::<harmonic_bond::Fast, 2>::boxed(kind, t, m),
         Kind::MorseBond => Bonds::<morse_bond::Fast, 2>::boxed(kind, t, m),
@@ -227,7 +267,7 @@ mod tests {
     /// Every term at positions `x` (n of them): finite forces and energy, or a clear error.
     fn finite_or_error(kind: Kind, x: &[[f64; 3]]) -> Result<(), &'static str> {
         let (model, n) = one_of(kind);
-        let g = group(kind, &[&model.terms[0]], &model, &None);
+        let g = group(kind, &[(0, &model.terms[0])], &model, &None);
         let v = vec![[0.2, -0.1, 0.05]; n];
         let (m, q, c) = (vec![1.0; n], vec![1.0; n], vec![[0.5, 0.3]; n]);
         let mut f = vec![[0.0; 3]; n];

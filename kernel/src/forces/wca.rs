@@ -1,7 +1,7 @@
 //! WCA: Lennard-Jones + ε inside 2^{1/6}σ, nothing beyond.
 
 use super::lennard_jones::Lj;
-use super::Paired;
+use super::{Jet, Paired};
 use lagra_checker::terms::wca::MINIMUM;
 
 pub struct Fast;
@@ -14,6 +14,11 @@ impl Paired for Fast {
     #[inline(always)]
     fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
         lj.shifted(d)
+    }
+    /// Inside 2^{1/6}σ the force is Lennard-Jones's (the cutoff moves with σ, but the force is
+    /// zero there, so no pair's force jumps).
+    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+        Some(lj.jet_at(p, r2))
     }
 }
 

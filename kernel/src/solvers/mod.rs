@@ -285,6 +285,17 @@ impl Stepper {
         Ok(Stepper { solver })
     }
 
+    /// Velocity Verlet resumed at a state whose forces and potential are `at` (a replay from a
+    /// saved state: the same bits as the run that saved it).
+    pub fn resume_verlet(at: Evaluated) -> Self {
+        Stepper { solver: Box::new(velocity_verlet::VelocityVerlet { at }) }
+    }
+
+    /// The forces and potential at the current state.
+    pub fn evaluated(&self) -> &Evaluated {
+        self.solver.evaluated()
+    }
+
     /// One step of `dt`: the state's step counter and clock advance with it (t = step·dt).
     pub fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
         self.advance_to(g, s, dt, s.step + 1)
