@@ -15,6 +15,20 @@ if ! command -v z3 >/dev/null 2>&1; then
   python3 -m pip install --quiet --disable-pip-version-check z3-solver >&2
   hash -r
 fi
+# The Python the tests drive Lagra from: the official MCP SDK (a client of `lagra mcp` no one
+# here wrote), in a virtual environment of the project's own (.venv, not committed).
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import mcp" >/dev/null 2>&1; then
+  echo "setup: preparing .venv with the MCP Python SDK (for tests/mcp.rs)" >&2
+  python3 -m venv .venv
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check "mcp>=2" >&2
+fi
+# Chromium, headless, loads the viewer's pages in tests/view.rs.
+if ! command -v chromium >/dev/null 2>&1; then
+  echo "setup: installing chromium (headless, for the viewer's tests)" >&2
+  sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq chromium >/dev/null
+fi
 # A RUSTFLAGS variable would replace .cargo/config.toml's `+fma`, which inari needs.
 if [ -n "${RUSTFLAGS:-}" ]; then
   echo "setup: warning: RUSTFLAGS is set and overrides .cargo/config.toml; inari needs -C target-feature=+fma" >&2

@@ -143,7 +143,7 @@ fn checker(c: &mut Criterion) {
     for name in ["bench/lj_32k_checked.lagra", "kepler.lagra"] {
         let s = scene(name);
         let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone() };
-        let opts = Options { steps: Some(100), trace: None, record: None, threads: 1, progress: None };
+        let opts = Options { steps: Some(100), trace: None, record: None, threads: 1, progress: None, stop: None };
         let later = run(&s, opts).expect("the run").state;
         group.throughput(Throughput::Elements(s.x0.len() as u64));
         for (at, state) in [("reference_checkpoint", &state), ("checkpoint_at_100", &later)] {
@@ -166,7 +166,8 @@ fn end_to_end(c: &mut Criterion) {
         group.throughput(Throughput::Elements(steps));
         group.bench_function(BenchmarkId::new("steps", &s.name), |b| {
             b.iter(|| {
-                let opts = Options { steps: Some(steps), trace: None, record: None, threads: 1, progress: None };
+                let opts =
+                    Options { steps: Some(steps), trace: None, record: None, threads: 1, progress: None, stop: None };
                 black_box(run(&s, opts).expect("the run").steps)
             })
         });

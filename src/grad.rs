@@ -55,7 +55,7 @@ pub struct GradArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum GradMethod {
+pub enum GradMethod {
     Reverse,
     Forward,
     Check,
@@ -153,6 +153,77 @@ fn warning(g: &Gradient) -> Option<String> {
     })
 }
 
+/// The gradients of `objective` by the chosen method(s), and the JSON report of them, as text
+/// (the document `lagra grad --json` prints and the MCP tool returns). `tell` hears the progress.
+pub fn compute(
+    scene: &Scene,
+    spelling: &str,
+    wrt: &str,
+    method: GradMethod,
+    threads: usize,
+    tell: &mut dyn FnMut(&str, u64, u64),
+) -> Result<(Vec<Gradient>, String), String> {
+    let objective = Objective::parse(spelling, scene)?;
+    let wrt = params::parse_list(wrt, scene)?;
+    if threads == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    let start = Instant::now();
+    let methods: &[Method] = match method {
+        GradMethod::Reverse => &[Method::Reverse],
+        GradMethod::Forward => &[Method::Forward],
+        GradMethod::Check => &[Method::Reverse, Method::Forward],
+    };
+    let mut results: Vec<Gradient> = vec![];
+    for &m in methods {
+        let request = Request { scene, objective: &objective, wrt: &wrt, threads, progress: Some(&mut *tell) };
+        results.push(gradient(request, m)?);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let first = &results[0];
+    let check = results.get(1).map(|f| {
+        let scale = first.gradient.iter().fold(f64::MIN_POSITIVE, |s, g| s.max(g.1.abs()));
+        first.gradient.iter().zip(&f.gradient).map(|(r, f)| (r.1 - f.1).abs() / scale).fold(0.0f64, f64::max)
+    });
+    let report = GradReport {
+        objective: spelling,
+        value: first.value,
+        gradient: Ordered(&first.gradient),
+        method: method.name(),
+        steps: first.steps,
+        seconds,
+        peak_memory_bytes: peak_memory(),
+        states_kept: first.states_kept,
+        growth: first.growth,
+        forward: results.get(1).map(|f| Ordered(&f.gradient)),
+        max_relative_difference: check,
+        warning: warning(first),
+    };
+    // written from the struct, so the derivatives keep the order they were asked in
+    let doc = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    Ok((results, doc))
+}
+
+impl GradMethod {
+    fn name(self) -> &'static str {
+        match self {
+            GradMethod::Reverse => "reverse",
+            GradMethod::Forward => "forward",
+            GradMethod::Check => "reverse+forward",
+        }
+    }
+
+    /// From the name `--method` takes.
+    pub fn from_name(s: &str) -> Option<GradMethod> {
+        match s {
+            "reverse" => Some(GradMethod::Reverse),
+            "forward" => Some(GradMethod::Forward),
+            "check" => Some(GradMethod::Check),
+            _ => None,
+        }
+    }
+}
+
 pub fn grad(a: GradArgs) -> ExitCode {
     let scene = match load(&a.file, &a.set, a.steps) {
         Ok(s) => s,
@@ -162,95 +233,52 @@ pub fn grad(a: GradArgs) -> ExitCode {
         }
         Err(e) => return bad(e),
     };
-    let objective = match Objective::parse(&a.objective, &scene) {
-        Ok(o) => o,
-        Err(e) => return bad(e),
-    };
-    let wrt = match params::parse_list(&a.wrt, &scene) {
-        Ok(w) => w,
-        Err(e) => return bad(e),
-    };
-    if a.threads == 0 {
-        return bad("--threads must be at least 1");
+    // bad spellings are bad input (2); a run that cannot be differentiated is not (1)
+    if let Err(e) = Objective::parse(&a.objective, &scene).and_then(|_| params::parse_list(&a.wrt, &scene)) {
+        return bad(e);
     }
-    let start = Instant::now();
-    let methods: Vec<Method> = match a.method {
-        GradMethod::Reverse => vec![Method::Reverse],
-        GradMethod::Forward => vec![Method::Forward],
-        GradMethod::Check => vec![Method::Reverse, Method::Forward],
+    let passes =
+        3 * scene.solver.steps * if a.method == GradMethod::Reverse { 1 } else { 1 + a.wrt.split(',').count() as u64 };
+    let mut progress = Progress::new(a.progress, passes);
+    let mut count = 0u64;
+    let mut tell = |what: &str, _done: u64, _of: u64| {
+        count += 1;
+        progress.iter_mut().for_each(|p| p.at_in(what, count.min(passes)));
     };
-    let mut results: Vec<Gradient> = vec![];
-    for method in methods {
-        let passes = match method {
-            Method::Reverse => 3 * scene.solver.steps,
-            Method::Forward => scene.solver.steps * wrt.len() as u64,
-        };
-        let mut progress = Progress::new(a.progress, passes);
-        let mut count = 0u64;
-        let mut tell = |what: &str, _done: u64, _of: u64| {
-            count += 1;
-            progress.iter_mut().for_each(|p| p.at_in(what, count.min(passes)));
-        };
-        let result = gradient(
-            Request { scene: &scene, objective: &objective, wrt: &wrt, threads: a.threads, progress: Some(&mut tell) },
-            method,
-        );
-        progress.iter().for_each(Progress::done);
-        match result {
-            Ok(g) => results.push(g),
-            Err(e) => {
-                eprintln!("lagra: {e}");
-                return ExitCode::from(1);
-            }
+    let result = compute(&scene, &a.objective, &a.wrt, a.method, a.threads, &mut tell);
+    progress.iter().for_each(Progress::done);
+    let (results, doc) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("lagra: {e}");
+            return ExitCode::from(1);
         }
-    }
-    let seconds = start.elapsed().as_secs_f64();
-    let first = &results[0];
-    let check = results.get(1).map(|f| {
-        let scale = first.gradient.iter().fold(f64::MIN_POSITIVE, |s, g| s.max(g.1.abs()));
-        first.gradient.iter().zip(&f.gradient).map(|(r, f)| (r.1 - f.1).abs() / scale).fold(0.0f64, f64::max)
-    });
-    let method = match a.method {
-        GradMethod::Reverse => "reverse",
-        GradMethod::Forward => "forward",
-        GradMethod::Check => "reverse+forward",
     };
-    let warn = warning(first);
     if a.json {
-        let report = GradReport {
-            objective: &a.objective,
-            value: first.value,
-            gradient: Ordered(&first.gradient),
-            method,
-            steps: first.steps,
-            seconds,
-            peak_memory_bytes: peak_memory(),
-            states_kept: first.states_kept,
-            growth: first.growth,
-            forward: results.get(1).map(|f| Ordered(&f.gradient)),
-            max_relative_difference: check,
-            warning: warn,
-        };
-        println!("{}", serde_json::to_string_pretty(&report).expect("plain data"));
-    } else {
-        println!("scene       {}", scene.name);
-        println!("objective   {} = {}", a.objective, first.value);
-        println!(
-            "method      {method}: {} steps of velocity_verlet, {} states kept at most, {seconds:.3} s, peak memory {}",
-            first.steps,
-            first.states_kept,
-            peak_memory().map_or("?".into(), |b| format!("{:.1} MB", b as f64 / 1e6))
-        );
-        let width = first.gradient.iter().map(|g| g.0.len()).max().unwrap_or(0);
-        for (name, g) in &first.gradient {
-            println!("∂J/∂{name:<width$} = {g:.10e}");
-        }
-        if let Some(d) = check {
-            println!("check       forward mode agrees to {d:.1e} (largest difference over the largest derivative)");
-        }
-        if let Some(w) = &warn {
-            println!("warning     {w}");
-        }
+        println!("{doc}");
+        return ExitCode::SUCCESS;
+    }
+    let doc: serde_json::Value = serde_json::from_str(&doc).expect("written above");
+    let first = &results[0];
+    println!("scene       {}", scene.name);
+    println!("objective   {} = {}", a.objective, first.value);
+    println!(
+        "method      {}: {} steps of velocity_verlet, {} states kept at most, {:.3} s, peak memory {}",
+        a.method.name(),
+        first.steps,
+        first.states_kept,
+        doc["seconds"].as_f64().unwrap_or(0.0),
+        peak_memory().map_or("?".into(), |b| format!("{:.1} MB", b as f64 / 1e6))
+    );
+    let width = first.gradient.iter().map(|g| g.0.len()).max().unwrap_or(0);
+    for (name, g) in &first.gradient {
+        println!("∂J/∂{name:<width$} = {g:.10e}");
+    }
+    if let Some(d) = doc["max_relative_difference"].as_f64() {
+        println!("check       forward mode agrees to {d:.1e} (largest difference over the largest derivative)");
+    }
+    if let Some(w) = doc["warning"].as_str() {
+        println!("warning     {w}");
     }
     ExitCode::SUCCESS
 }

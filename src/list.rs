@@ -2,7 +2,7 @@
 
 use lagra_kernel::lang::compile;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
@@ -16,7 +16,7 @@ pub struct Args {
 }
 
 #[derive(Serialize)]
-struct Entry {
+pub struct Entry {
     file: String,
     scene: String,
     domain: Option<String>,
@@ -26,45 +26,49 @@ struct Entry {
     predictions: Vec<&'static str>,
 }
 
-pub fn main(a: Args) -> ExitCode {
-    let mut files: Vec<PathBuf> = match std::fs::read_dir(&a.dir) {
-        Ok(d) => {
-            d.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "lagra")).collect()
+/// The `.lagra` files of a folder, sorted.
+pub fn files(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let d = std::fs::read_dir(dir).map_err(|e| format!("cannot read {}: {e}", dir.display()))?;
+    let mut files: Vec<PathBuf> =
+        d.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "lagra")).collect();
+    files.sort();
+    Ok(files)
+}
+
+/// Every scene of a folder, or the first one that does not compile (its located diagnostic).
+pub fn entries(dir: &Path) -> Result<Vec<Entry>, String> {
+    let mut entries = vec![];
+    for f in files(dir)? {
+        let path = f.display().to_string();
+        let source = std::fs::read_to_string(&f).unwrap_or_default();
+        let s = compile(&source).map_err(|d| d.render(&path, &source).to_string())?;
+        let mut terms: Vec<&str> = vec![];
+        for t in &s.model.terms {
+            if !terms.contains(&t.kind.name()) {
+                terms.push(t.kind.name());
+            }
         }
+        entries.push(Entry {
+            file: path,
+            scene: s.name,
+            domain: s.domain,
+            bodies: s.model.bodies.len(),
+            terms,
+            claims: s.claims.iter().map(|c| c.label()).collect(),
+            predictions: s.predictions.iter().map(|p| p.kind.name()).collect(),
+        });
+    }
+    Ok(entries)
+}
+
+pub fn main(a: Args) -> ExitCode {
+    let entries = match entries(&a.dir) {
+        Ok(e) => e,
         Err(e) => {
-            eprintln!("lagra: cannot read {}: {e}", a.dir.display());
+            eprintln!("{}", if e.starts_with("cannot read") { format!("lagra: {e}") } else { e });
             return ExitCode::from(2);
         }
     };
-    files.sort();
-    let mut entries = vec![];
-    for f in &files {
-        let path = f.display().to_string();
-        let source = std::fs::read_to_string(f).unwrap_or_default();
-        match compile(&source) {
-            Ok(s) => {
-                let mut terms: Vec<&str> = vec![];
-                for t in &s.model.terms {
-                    if !terms.contains(&t.kind.name()) {
-                        terms.push(t.kind.name());
-                    }
-                }
-                entries.push(Entry {
-                    file: path,
-                    scene: s.name,
-                    domain: s.domain,
-                    bodies: s.model.bodies.len(),
-                    terms,
-                    claims: s.claims.iter().map(|c| c.label()).collect(),
-                    predictions: s.predictions.iter().map(|p| p.kind.name()).collect(),
-                });
-            }
-            Err(d) => {
-                eprintln!("{}", d.render(&path, &source));
-                return ExitCode::from(2);
-            }
-        }
-    }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&entries).expect("plain data"));
     } else {

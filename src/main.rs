@@ -5,12 +5,14 @@ mod check;
 mod grad;
 mod lean;
 mod list;
+mod mcp;
 mod noether;
 mod progress;
 mod report;
 mod run;
 mod summation;
 mod terms;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -56,6 +58,12 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
     /// Fit parameters to a trace: L-BFGS on the mean squared distance of the positions, with
     /// exact gradients.
     Fit(grad::FitArgs),
+    /// Write a self-contained HTML page that plays a trace in 3D, with plots of the energy, the
+    /// momentum and each claim's certified bound per checkpoint.
+    View(view::Args),
+    /// A Model Context Protocol server on stdin/stdout, for agents: list, read, check and run
+    /// scenes, the vocabulary, Noether, certificates and gradients as tools.
+    Mcp(mcp::Args),
 }
 
 fn main() -> ExitCode {
@@ -69,5 +77,7 @@ fn main() -> ExitCode {
         Command::Noether(args) => noether::main(args),
         Command::Grad(args) => grad::grad(args),
         Command::Fit(args) => grad::fit(args),
+        Command::Mcp(args) => mcp::main(args),
+        Command::View(args) => view::main(args),
     }
 }

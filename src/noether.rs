@@ -130,6 +130,24 @@ fn lines(a: &Analysis) -> Vec<Line> {
         .collect()
 }
 
+/// What `lagra noether` prints for a scene's source, as JSON and as text.
+pub fn report(source: &str, path: &str) -> Result<(serde_json::Value, String), String> {
+    let mut scene = compile(source).map_err(|d| d.render(path, source).to_string())?;
+    let (analysis, _, _) = apply(&mut scene, path, source);
+    let lines = lines(&analysis);
+    let doc = serde_json::json!({ "scene": scene.name, "derived_by": Table::derived().derived_by, "laws": lines });
+    let mut text = format!("scene {} — what its symmetries conserve (Noether), from the derived table\n", scene.name);
+    for l in &lines {
+        let what = match l.status {
+            "conserved" => format!("conserved: {}", l.formula),
+            "balance" => format!("a balance H + Q = H₀: dissipated by {}", l.by.join(", ")),
+            _ => format!("broken by {}", l.by.join(", ")),
+        };
+        text += &format!("{:<20} {what}\n", l.charge);
+    }
+    Ok((doc, text))
+}
+
 pub fn main(a: Args) -> ExitCode {
     let path = a.file.display().to_string();
     let source = match std::fs::read_to_string(&a.file) {
@@ -139,29 +157,21 @@ pub fn main(a: Args) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let mut scene = match compile(&source) {
-        Ok(s) => s,
-        Err(d) => {
-            eprintln!("{}", d.render(&path, &source));
-            return ExitCode::from(2);
+    if let Ok(mut scene) = compile(&source) {
+        apply(&mut scene, &path, &source).1.iter().for_each(|w| eprintln!("{w}"));
+    }
+    match report(&source, &path) {
+        Ok((doc, text)) => {
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&doc).expect("plain data"));
+            } else {
+                print!("{text}");
+            }
+            ExitCode::SUCCESS
         }
-    };
-    let (analysis, warnings, _) = apply(&mut scene, &path, &source);
-    warnings.iter().for_each(|w| eprintln!("{w}"));
-    let lines = lines(&analysis);
-    if a.json {
-        let doc = serde_json::json!({ "scene": scene.name, "derived_by": Table::derived().derived_by, "laws": lines });
-        println!("{}", serde_json::to_string_pretty(&doc).expect("plain data"));
-        return ExitCode::SUCCESS;
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::from(2)
+        }
     }
-    println!("scene {} — what its symmetries conserve (Noether), from the derived table", scene.name);
-    for l in &lines {
-        let what = match l.status {
-            "conserved" => format!("conserved: {}", l.formula),
-            "balance" => format!("a balance H + Q = H₀: dissipated by {}", l.by.join(", ")),
-            _ => format!("broken by {}", l.by.join(", ")),
-        };
-        println!("{:<20} {what}", l.charge);
-    }
-    ExitCode::SUCCESS
 }

@@ -83,6 +83,7 @@ impl Summary {
             }
             Stop::Checker(Halt::InvalidState(m)) => format!("halted: {m}"),
             Stop::Solver { step, message } => format!("halted at step {step}: {message}"),
+            Stop::Cancelled { step } => format!("cancelled at step {step}: the claims were judged up to there"),
         });
         let passed =
             halted.is_none() && claims.iter().all(|c| c.verdict.is_pass()) && r.predictions.iter().all(|p| p.agrees);

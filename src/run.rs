@@ -8,8 +8,10 @@ use lagra_checker::decision::Verdict;
 use lagra_checker::model::Snapshot;
 use lagra_checker::states::StateWriter;
 use lagra_kernel::lang::compile;
-use lagra_kernel::run::{run, Options};
+use lagra_kernel::run::{run, Options, Report};
+use lagra_kernel::scene::Scene;
 use lagra_kernel::solvers::Integrator;
+use lagra_noether::Analysis;
 use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -30,12 +32,23 @@ pub struct Args {
     /// enclosures, verdicts (re-check it with `lagra check` or `lagra-check`).
     #[arg(long, value_name = "FILE")]
     certificate: Option<PathBuf>,
+    /// Write a page that plays the run in a browser: the trace (written by --trace or kept in
+    /// memory), the scene and the certificate in one self-contained HTML file (`lagra view`).
+    #[arg(long, value_name = "FILE.html")]
+    view: Option<PathBuf>,
     /// Write every state the checker saw, exactly, so a re-check can evaluate every claim again.
     #[arg(long, value_name = "FILE")]
     states: Option<PathBuf>,
     /// Run this many steps instead of the scene's own run length.
     #[arg(long, value_name = "N")]
     steps: Option<u64>,
+    /// Use this time step instead of the scene's own (in the scene's units).
+    #[arg(long, value_name = "DT")]
+    dt: Option<f64>,
+    /// Set a parameter before the run: NAME=VALUE with the spellings of `lagra grad` (trap.k,
+    /// body[0].mass, ...); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
     /// Threads for the forces. Any count gives the same bits; more help only on thousands of
     /// bodies with pair terms.
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -76,22 +89,63 @@ fn bad(msg: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(2)
 }
 
+/// A scene as `lagra run` runs it: compiled from its source, its `--set` and `--dt` applied,
+/// `@expect noether` expanded; with the Noether analysis and the warnings it gave.
+pub struct Prepared {
+    pub scene: Scene,
+    pub analysis: Analysis,
+    pub warnings: Vec<String>,
+    pub generated: usize,
+}
+
+/// Compiles a scene's source (`path` names it in messages), applies the settings and a time
+/// step, and expands `@expect noether`. The error is the message to show, a located diagnostic
+/// for a scene error.
+pub fn prepare(source: &str, path: &str, set: &[String], dt: Option<f64>) -> Result<Prepared, String> {
+    let mut scene = compile(source).map_err(|d| d.render(path, source).to_string())?;
+    lagra_kernel::grad::params::apply_settings(&mut scene, set)?;
+    if let Some(dt) = dt {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(format!("the time step must be positive and finite, got {dt}"));
+        }
+        scene.solver.dt = dt;
+    }
+    let (analysis, warnings, generated) = noether::apply(&mut scene, path, source);
+    Ok(Prepared { scene, analysis, warnings, generated })
+}
+
+/// The report of a finished run, with what Noether says of each failed claim.
+pub fn summarize(path: &str, p: &Prepared, rep: &Report, threads: usize, explain: bool) -> report::Summary {
+    let mut summary = report::Summary::new(path, &p.scene, rep, threads, explain);
+    summary.generated = p.generated;
+    summary.notes = p
+        .scene
+        .claims
+        .iter()
+        .zip(&summary.claims)
+        .filter(|(_, line)| matches!(line.verdict, Verdict::Fail(_)))
+        .filter_map(|(c, _)| noether::note(&p.analysis, c))
+        .collect();
+    summary
+}
+
 pub fn main(a: Args) -> ExitCode {
     let path = a.file.display().to_string();
     let source = match std::fs::read_to_string(&a.file) {
         Ok(s) => s,
         Err(e) => return bad(format!("cannot read {path}: {e}")),
     };
-    let mut scene = match compile(&source) {
-        Ok(s) => s,
-        Err(d) => {
-            eprintln!("{}", d.render(&path, &source));
+    let prepared = match prepare(&source, &path, &a.set, a.dt) {
+        Ok(p) => p,
+        Err(e) if e.contains('\n') => {
+            eprintln!("{e}");
             return ExitCode::from(2);
         }
+        Err(e) => return bad(e),
     };
-    let (analysis, warnings, generated) = noether::apply(&mut scene, &path, &source);
-    warnings.iter().for_each(|w| eprintln!("{w}"));
-    if a.strict && !warnings.is_empty() {
+    let scene = &prepared.scene;
+    prepared.warnings.iter().for_each(|w| eprintln!("{w}"));
+    if a.strict && !prepared.warnings.is_empty() {
         return bad("--strict: a declared claim contradicts the scene's symmetries (see above)");
     }
     if a.steps == Some(0) {
@@ -100,9 +154,15 @@ pub fn main(a: Args) -> ExitCode {
     if a.threads == 0 {
         return bad("--threads must be at least 1");
     }
-    let mut trace = match a.trace.as_ref().map(File::create).transpose() {
-        Ok(f) => f.map(BufWriter::new),
-        Err(e) => return bad(format!("cannot create the trace file: {e}")),
+    // the trace goes to its file, or, for a page and no file, to memory
+    let mut kept: Vec<u8> = vec![];
+    let mut trace: Option<Box<dyn Write + '_>> = match (&a.trace, &a.view) {
+        (Some(p), _) => match File::create(p) {
+            Ok(f) => Some(Box::new(BufWriter::new(f))),
+            Err(e) => return bad(format!("cannot create the trace file: {e}")),
+        },
+        (None, Some(_)) => Some(Box::new(&mut kept)),
+        (None, None) => None,
     };
     let mut states = match a
         .states
@@ -118,17 +178,19 @@ pub fn main(a: Args) -> ExitCode {
     let shown = progress.is_some();
     let mut tick = |step: u64| progress.as_mut().into_iter().for_each(|p| p.at(step));
     let result = run(
-        &scene,
+        scene,
         Options {
             steps: a.steps,
-            trace: trace.as_mut().map(|w| w as &mut dyn Write),
+            trace: trace.as_mut().map(|w| w.as_mut() as &mut dyn Write),
             record: a.states.is_some().then_some(&mut record),
             threads: a.threads,
             progress: shown.then_some(&mut tick),
+            stop: None,
         },
     );
     progress.iter().for_each(Progress::done);
-    let flushed = trace.map(|mut t| t.flush()).transpose();
+    let flushed = trace.take().map(|mut t| t.flush()).transpose();
+    drop(trace);
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,
         (Err(e), _) => return bad(e),
@@ -138,16 +200,8 @@ pub fn main(a: Args) -> ExitCode {
         Ok(sum) => sum.map(label),
         Err(e) => return bad(format!("writing the state file: {e}")),
     };
-    let mut summary = report::Summary::new(&path, &scene, &rep, a.threads, a.explain);
-    summary.generated = generated;
-    summary.notes = scene
-        .claims
-        .iter()
-        .zip(&summary.claims)
-        .filter(|(_, line)| matches!(line.verdict, Verdict::Fail(_)))
-        .filter_map(|(c, _)| noether::note(&analysis, c))
-        .collect();
-    if let Some(c) = &a.certificate {
+    let summary = summarize(&path, &prepared, &rep, a.threads, a.explain);
+    if a.certificate.is_some() || a.view.is_some() {
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {
             format: certificate::FORMAT.into(),
@@ -167,8 +221,22 @@ pub fn main(a: Args) -> ExitCode {
             checksum: String::new(),
         }
         .seal();
-        if let Err(e) = std::fs::write(c, cert.to_json() + "\n") {
-            return bad(format!("cannot write the certificate {}: {e}", c.display()));
+        if let Some(c) = &a.certificate {
+            if let Err(e) = std::fs::write(c, cert.to_json() + "\n") {
+                return bad(format!("cannot write the certificate {}: {e}", c.display()));
+            }
+        }
+        if let Some(out) = &a.view {
+            let text = match &a.trace {
+                Some(p) => std::fs::read_to_string(p).map_err(|e| format!("cannot read the trace back: {e}")),
+                None => String::from_utf8(std::mem::take(&mut kept)).map_err(|e| e.to_string()),
+            };
+            let page = text.and_then(|t| crate::view::page(&t, "the trace", Some(scene), Some(&cert)));
+            if let Err(e) =
+                page.and_then(|p| std::fs::write(out, p).map_err(|e| format!("cannot write {}: {e}", out.display())))
+            {
+                return bad(e);
+            }
         }
     }
     if a.json {

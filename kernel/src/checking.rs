@@ -184,11 +184,14 @@ mod tests {
     /// reference, inline.
     fn both(scene: &crate::scene::Scene) -> (Report, Report) {
         let overlapped =
-            run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
-        let mut sink = std::io::sink();
-        let inline =
-            run(scene, Options { steps: None, trace: Some(&mut sink), record: None, threads: 1, progress: None })
+            run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
                 .unwrap();
+        let mut sink = std::io::sink();
+        let inline = run(
+            scene,
+            Options { steps: None, trace: Some(&mut sink), record: None, threads: 1, progress: None, stop: None },
+        )
+        .unwrap();
         assert!(overlapped.checker.starts_with("on a second thread") && inline.checker.starts_with("inline"));
         (overlapped, inline)
     }
@@ -249,7 +252,10 @@ mod tests {
     fn with_progress(scene: &crate::scene::Scene) -> (Report, Vec<u64>) {
         let mut reached = vec![];
         let mut tick = |step: u64| reached.push(step);
-        let r = run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: Some(&mut tick) });
+        let r = run(
+            scene,
+            Options { steps: None, trace: None, record: None, threads: 1, progress: Some(&mut tick), stop: None },
+        );
         (r.unwrap(), reached)
     }
 
@@ -274,15 +280,18 @@ mod tests {
             ))
             .unwrap();
             let straight =
-                run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
+                run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
+                    .unwrap();
             let mut shown = 0;
             let mut each = |_: &lagra_checker::model::Snapshot| -> std::io::Result<()> {
                 shown += 1;
                 Ok(())
             };
-            let every =
-                run(&scene, Options { steps: None, trace: None, record: Some(&mut each), threads: 1, progress: None })
-                    .unwrap();
+            let every = run(
+                &scene,
+                Options { steps: None, trace: None, record: Some(&mut each), threads: 1, progress: None, stop: None },
+            )
+            .unwrap();
             same(&straight, &every);
             assert_eq!(shown, every.steps + 1);
             assert!(format!("{:?}", every.stop).starts_with(ends), "{:?}", every.stop);
@@ -308,7 +317,8 @@ mod tests {
         )
         .unwrap();
         let plain =
-            run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None }).unwrap();
+            run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
+                .unwrap();
         let (watched, reached) = with_progress(&scene);
         same(&plain, &watched);
         assert_eq!(reached, [1 << 19, 1 << 20, 1_200_000]);

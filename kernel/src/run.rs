@@ -23,6 +23,8 @@ pub enum Stop {
     /// The solver could not take this step: a force is undefined there, or an iteration inside
     /// the step (constraints, an action window) did not reach its tolerance.
     Solver { step: u64, message: String },
+    /// The caller asked the run to stop (`Options::stop`), here.
+    Cancelled { step: u64 },
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -70,6 +72,9 @@ pub struct Options<'a> {
     /// Called with the step reached about every million atom-steps, for a progress line (the
     /// run's results are the same with or without it).
     pub progress: Option<&'a mut dyn FnMut(u64)>,
+    /// Read as often as `progress` is called: once set, the run stops there (`Stop::Cancelled`),
+    /// with the claims judged up to the state reached.
+    pub stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 #[derive(Serialize)]
@@ -112,7 +117,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // checker its checkpoints: the solver steps straight to the next of them
     let every_step = record.is_some() || !meters.is_empty();
     let mut progress = opts.progress.take();
-    let stride = if progress.is_some() { ((1u64 << 20) / scene.x0.len().max(1) as u64).max(1) } else { u64::MAX };
+    let cancel = opts.stop;
+    let watched_often = progress.is_some() || cancel.is_some();
+    let stride = if watched_often { ((1u64 << 20) / scene.x0.len().max(1) as u64).max(1) } else { u64::MAX };
     let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
@@ -161,6 +168,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     }
                     if let Some(p) = progress.as_mut() {
                         p(state.step);
+                    }
+                    if stop.is_none() && cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                        stop = Some(Stop::Cancelled { step: state.step });
                     }
                 }
                 if stop.is_none() {

@@ -27,6 +27,18 @@ pub struct NoetherRequest {
     pub every: u64,
 }
 
+impl Scene {
+    /// Works the predictions out again from the model and initial state as they are now (after
+    /// a parameter was set): a prediction that no longer applies is an error naming it.
+    pub fn repredict(&mut self) -> Result<(), String> {
+        for p in &mut self.predictions {
+            p.predicted =
+                p.kind.predict(&self.model, &self.x0, &self.v0).map_err(|why| format!("{}: {why}", p.kind.name()))?;
+        }
+        Ok(())
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub name: String,

@@ -175,7 +175,8 @@ pub fn apply_settings(scene: &mut Scene, settings: &[String]) -> Result<(), Stri
         }
         params[0].param.set(scene, value).map_err(|e| format!("`{s}`: {e}"))?;
     }
-    scene.model.validate().map_err(|e| format!("after --set: {e}"))
+    scene.model.validate().map_err(|e| format!("after --set: {e}"))?;
+    scene.repredict().map_err(|e| format!("after --set: {e}"))
 }
 
 #[cfg(test)]
@@ -234,6 +235,15 @@ mod tests {
     fn settings_change_the_scene() {
         let mut s = scene();
         apply_settings(&mut s, &["trap.k=2.5".into(), "body[1].velocity.y=0.3".into()]).unwrap();
+        // predictions follow a parameter set
+        let mut osc = compile(
+            "scene o { entity { position: [0, 0, 0], mass: 1 } entity { position: [1.5, 0, 0], mass: 1 }
+            bond harmonic [0, 1] { k: 2, r0: 1 } @predict oscillator_period solver { dt: 0.01 } }",
+        )
+        .unwrap();
+        let before = osc.predictions[0].predicted.unwrap();
+        apply_settings(&mut osc, &["harmonic.k=8".into()]).unwrap();
+        assert!((osc.predictions[0].predicted.unwrap() - 0.5 * before).abs() < 1e-12);
         assert_eq!((s.model.terms[2].params[0], s.v0[1][1]), (2.5, 0.3));
         assert!(apply_settings(&mut s, &["body[0].mass=-1".into()]).unwrap_err().contains("positive"));
         assert!(apply_settings(&mut s, &["trap.center=1".into()]).unwrap_err().contains("is a vector"));
