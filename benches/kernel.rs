@@ -85,9 +85,10 @@ fn forces(c: &mut Criterion) {
             bodies: bodies.clone(),
             terms: instance(kind, n),
             constraints: vec![],
+            thermostat: None,
         };
         let graph = LagrangianGraph::new(&model);
-        let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n] };
+        let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n], chain: vec![] };
         let mut f = vec![[0.0; 3]; n];
         group.bench_function(BenchmarkId::new(kind.name(), n), |b| {
             b.iter(|| black_box(graph.forces(black_box(&s), &mut f).expect("no singularity")))
@@ -142,7 +143,7 @@ fn checker(c: &mut Criterion) {
     group.sample_size(10);
     for name in ["bench/lj_32k_checked.lagra", "kepler.lagra"] {
         let s = scene(name);
-        let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone() };
+        let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone(), chain: vec![] };
         let opts = Options { steps: Some(100), trace: None, record: None, threads: 1, progress: None, stop: None };
         let later = run(&s, opts).expect("the run").state;
         group.throughput(Throughput::Elements(s.x0.len() as u64));

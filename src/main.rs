@@ -12,6 +12,7 @@ mod report;
 mod run;
 mod summation;
 mod terms;
+mod validation;
 mod view;
 
 use clap::{Parser, Subcommand};

@@ -4,6 +4,7 @@ use lagra_checker::decision::Verdict;
 use lagra_checker::model::UnitSystem;
 use lagra_checker::monitor::Halt;
 use lagra_checker::render::{lines, sci, up};
+use lagra_kernel::observables::{Estimate, Observables};
 use lagra_kernel::run::{Measured, Report, Stop};
 use lagra_kernel::scene::Scene;
 use lagra_kernel::solvers::Iterations;
@@ -32,6 +33,8 @@ pub struct Summary {
     pub bodies: usize,
     pub terms: Vec<TermCount>,
     pub integrator: &'static str,
+    /// The thermostat, in words (`None` at constant energy).
+    pub thermostat: Option<String>,
     pub dt: f64,
     /// The unit `dt` is in: " s" for SI scenes, nothing for reduced units.
     #[serde(skip)]
@@ -53,6 +56,8 @@ pub struct Summary {
     explain: bool,
     pub claims: Vec<ClaimLine>,
     pub predictions: Vec<Measured>,
+    /// Means and standard errors after `equilibrate`: `observables.<name>.mean`, `.stderr`.
+    pub observables: Option<Observables>,
     /// Why the run stopped early, if it did.
     pub halted: Option<String>,
     /// How many claims `@expect noether` generated (they are among `claims`).
@@ -74,7 +79,7 @@ impl Summary {
                 None => terms.push(TermCount { kind: t.kind.name(), count: 1, dissipative: t.dissipates() }),
             }
         }
-        let lines = lines(&r.outcome.verdicts, &scene.claims, &r.outcome.dissipators);
+        let lines = lines(&r.outcome.verdicts, &scene.claims, &r.outcome.dissipators, scene.model.thermostat.is_some());
         let claims: Vec<ClaimLine> =
             r.outcome.verdicts.iter().zip(lines).map(|(v, line)| ClaimLine { line, verdict: v.clone() }).collect();
         let halted = r.stop.as_ref().map(|s| match s {
@@ -95,6 +100,7 @@ impl Summary {
             bodies: scene.model.bodies.len(),
             terms,
             integrator: scene.solver.integrator.name(),
+            thermostat: thermostat(scene),
             dt: scene.solver.dt,
             time_unit: if scene.model.units == UnitSystem::Si { " s" } else { "" },
             steps: r.steps,
@@ -108,6 +114,7 @@ impl Summary {
             explain,
             claims,
             predictions: r.predictions.clone(),
+            observables: r.observables.clone(),
             halted,
             generated: 0,
             notes: vec![],
@@ -128,6 +135,9 @@ impl Summary {
         let _ = writeln!(s, "bodies      {}", self.bodies);
         let _ = writeln!(s, "terms       {terms}");
         let _ = writeln!(s, "integrator  {}, dt {}{}, {} steps", self.integrator, self.dt, self.time_unit, self.steps);
+        if let Some(t) = &self.thermostat {
+            let _ = writeln!(s, "thermostat  {t}");
+        }
         let rate = match (self.steps_per_s, self.ns_per_atom_step) {
             (Some(steps), Some(ns)) => format!("{steps:.0} steps/s, {ns:.1} ns/atom-step, "),
             _ => String::new(),
@@ -176,9 +186,69 @@ impl Summary {
                 _ => writeln!(s, "{} NOT MEASURED  the run saw too little of the motion", p.name),
             };
         }
+        if let Some(o) = &self.observables {
+            observables(&mut s, o);
+        }
         if let Some(h) = &self.halted {
             let _ = writeln!(s, "{h}");
         }
         s
+    }
+}
+
+fn thermostat(scene: &Scene) -> Option<String> {
+    use lagra_kernel::thermostat::Thermostat;
+    let bath = scene.bath()?;
+    Some(match (scene.thermostat.as_ref()?, &scene.model.thermostat) {
+        (Thermostat::NoseHoover { tau }, Some(c)) => format!(
+            "nose_hoover at kT {}, tau {tau}: a chain of {} link(s) over {} degrees of freedom (the energy claim is about H′ = H + the chain's energy)",
+            bath.kt,
+            c.masses.len(),
+            c.dof
+        ),
+        (Thermostat::Langevin { gamma, seed, .. }, _) => {
+            format!("langevin at kT {}, gamma {gamma}, seed {seed} (BAOAB; no energy or momentum claim can hold)", bath.kt)
+        }
+        _ => return None,
+    })
+}
+
+fn observables(s: &mut String, o: &Observables) {
+    let samples = o.potential_energy_per_body.samples;
+    let _ = writeln!(
+        s,
+        "observed    after step {}, every {} steps: {samples} samples, errors from {} blocks of {}",
+        o.from_step,
+        o.every,
+        o.blocks,
+        samples / o.blocks as u64
+    );
+    let show = |e: &Estimate| match e.stderr {
+        Some(err) => format!("{:.6} ± {:.6}", e.mean, err),
+        None => format!("{:.6} (too few samples for an error)", e.mean),
+    };
+    let tail = |x: Option<f64>| x.map(|t| format!(" (tail {t:.6} included)")).unwrap_or_default();
+    let _ = writeln!(
+        s,
+        "  potential_energy_per_body  {}{}",
+        show(&o.potential_energy_per_body),
+        tail(o.tail.map(|t| t.energy_per_body))
+    );
+    let _ = writeln!(s, "  kinetic_temperature        {}", show(&o.kinetic_temperature));
+    if let Some(p) = &o.pressure {
+        let _ = writeln!(s, "  pressure                   {}{}", show(p), tail(o.tail.map(|t| t.pressure)));
+    }
+    if let Some(d) = &o.diffusion {
+        let _ = writeln!(s, "  diffusion                  {}", show(d));
+    }
+    if let Some((r, g)) = o.rdf.as_ref().and_then(|r| r.peak()) {
+        let _ = writeln!(
+            s,
+            "  rdf                        highest peak g = {g:.3} at r = {r:.3} ({} samples; --json has g(r))",
+            o.rdf.as_ref().map_or(0, |r| r.samples)
+        );
+    }
+    for n in &o.notes {
+        let _ = writeln!(s, "  ({n})");
     }
 }

@@ -167,7 +167,7 @@ pub fn main(a: Args) -> ExitCode {
     let mut states = match a
         .states
         .as_ref()
-        .map(|p| File::create(p).and_then(|f| StateWriter::new(BufWriter::new(f), scene.x0.len())))
+        .map(|p| File::create(p).and_then(|f| StateWriter::new(BufWriter::new(f), scene.x0.len(), scene.model.links())))
         .transpose()
     {
         Ok(w) => w,

@@ -99,7 +99,7 @@ pub struct Study {
 pub fn study(steps: u64) -> Result<Study, String> {
     let scene = compile(TEXT).map_err(|d| d.render(SCENE, TEXT).to_string())?;
     let graph = LagrangianGraph::new(&scene.model);
-    let mut s = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
+    let mut s = scene.start();
     let start = witnesses(&scene.model, &s);
     let mut stepper = Stepper::new(Integrator::VelocityVerlet, Integrator::VelocityVerlet.defaults(), &graph, &s)
         .map_err(|e| e.to_string())?;

@@ -25,6 +25,7 @@ pub mod render;
 mod soundness;
 pub mod states;
 pub mod terms;
+pub mod thermostat;
 pub mod units;
 
 /// Stand-ins for `kani::any`, so the Kani harnesses type-check where Kani cannot be installed:

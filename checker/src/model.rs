@@ -3,6 +3,7 @@
 //! certificate carries it, so a re-check needs nothing else.
 
 use crate::terms::{Kind, Shape};
+use crate::thermostat::Chain;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -122,6 +123,9 @@ pub struct Model {
     pub terms: Vec<TermInstance>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub constraints: Vec<Constraint>,
+    /// A Nosé–Hoover chain: its links are in every state (`Snapshot::chain`) and its energy in H.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermostat: Option<Chain>,
 }
 
 /// A state of the system as the kernel produced it, exactly.
@@ -131,6 +135,8 @@ pub struct Snapshot<'a> {
     pub t: f64,
     pub x: &'a [[f64; 3]],
     pub v: &'a [[f64; 3]],
+    /// The thermostat's links (η_j, ξ_j), empty without one.
+    pub chain: &'a [[f64; 2]],
 }
 
 impl Model {
@@ -183,7 +189,12 @@ impl Model {
                 return Err(format!("constraint {n}: length must be finite and positive, got {}", c.length));
             }
         }
-        Ok(())
+        self.thermostat.as_ref().map_or(Ok(()), Chain::validate)
+    }
+
+    /// The links a state of this model holds.
+    pub fn links(&self) -> usize {
+        self.thermostat.as_ref().map_or(0, |c| c.masses.len())
     }
 
     /// Rejects a state that does not fit the model or holds a non-finite number.
@@ -199,6 +210,12 @@ impl Model {
             if x.iter().chain(v).any(|c| !c.is_finite()) {
                 return Err(format!("step {}: body {i} has a non-finite coordinate ({x:?}, {v:?})", s.step));
             }
+        }
+        if s.chain.len() != self.links() {
+            return Err(format!("state has {} thermostat links for a chain of {}", s.chain.len(), self.links()));
+        }
+        if let Some(l) = s.chain.iter().find(|l| l.iter().any(|c| !c.is_finite())) {
+            return Err(format!("step {}: a thermostat link is not finite ({l:?})", s.step));
         }
         Ok(())
     }

@@ -269,7 +269,7 @@ impl Monitor {
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
 fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Outward, tol: f64) -> Mark {
-    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v };
+    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v, chain: &[] };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
         let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model);
@@ -385,6 +385,7 @@ mod tests {
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
             constraints: vec![],
+            thermostat: None,
         }
     }
 
@@ -395,7 +396,7 @@ mod tests {
     fn observe(m: &mut Monitor, step: u64, x1: f64, v0: f64) -> Result<(), Halt> {
         let x = [[0.0; 3], [x1, 0.0, 0.0]];
         let v = [[v0, 0.0, 0.0], [0.0; 3]];
-        m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v })
+        m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] })
     }
 
     #[test]
@@ -454,10 +455,10 @@ mod tests {
         let mut m = Monitor::new(damped, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
         let x = [[0.0; 3], [1.5, 0.0, 0.0]];
         let v0 = [[0.0; 3], [1.0, 0.0, 0.0]];
-        m.observe(&Snapshot { step: 0, t: 0.0, x: &x, v: &v0 }).unwrap();
+        m.observe(&Snapshot { step: 0, t: 0.0, x: &x, v: &v0, chain: &[] }).unwrap();
         // One time unit later the kinetic energy ½ has become exactly the dissipated ½.
         let v1 = [[0.0; 3], [0.0, 0.0, 0.0]];
-        let err = m.observe(&Snapshot { step: 1, t: 1.0, x: &x, v: &v1 });
+        let err = m.observe(&Snapshot { step: 1, t: 1.0, x: &x, v: &v1, chain: &[] });
         // The trapezoid saw power 1 then 0: Q = ½, so H + Q = H₀ holds exactly.
         assert_eq!(err, Ok(()));
         assert_eq!(m.finish().dissipators, [Kind::HarmonicBond]);
@@ -472,6 +473,7 @@ mod tests {
             bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
             constraints: vec![],
+            thermostat: None,
         };
         (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])
     }
@@ -481,13 +483,13 @@ mod tests {
         let (model, x, v) = cancelling();
         let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
         for step in 0..=1 {
-            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
         }
         let out = m.finish();
         let Verdict::Pass(p) = &out.verdicts[0] else { panic!("{:?}", out.verdicts[0]) };
         assert_eq!(p.precision(), 128);
         // and binary64 intervals alone really could not: their enclosure straddles 1e-12
-        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Outward::NAN);
+        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] }, &Outward::NAN);
         let h = q.energy(&cancelling().0);
         let energy = claim(ClaimKind::EnergyConservation, Some(1e-12), 1);
         let (lo, hi) = deviation(&energy, vec![h], vec![h], Outward::point(0.0)).bounds();
@@ -501,7 +503,7 @@ mod tests {
         let (x, v) = ([[1.0, 2.0, 3.0]], [[0.0; 3]]);
         let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-3), 1)], 1).unwrap();
         for step in 0..=1 {
-            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
         }
         let out = m.finish();
         assert!(matches!(out.verdicts[0], Verdict::Undecided(Breach { precision: 1024, .. })), "{:?}", out.verdicts[0]);
@@ -537,7 +539,7 @@ mod tests {
                 let mut seen = vec![];
                 while step <= last {
                     let (x, v) = state(step);
-                    let verdict = m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v });
+                    let verdict = m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] });
                     seen.push(step);
                     if verdict.is_err() {
                         break;

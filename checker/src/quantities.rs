@@ -14,6 +14,8 @@ use std::sync::Arc;
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
     sites: Vec<Site<R>>,
+    /// A thermostat chain's links (η, ξ).
+    links: Vec<[R; 2]>,
     params: Vec<Vec<R>>,
     zero: R,
     /// The exact positions, to choose periodic images from.
@@ -46,6 +48,7 @@ impl<R: PairSum> Lifted<R> {
         let params = model.terms.iter().map(|t| [lifted(t), t.kind.constants(&lifted(t))].concat()).collect();
         Lifted {
             sites,
+            links: s.chain.iter().map(|l| l.map(|c| proto.lift(c))).collect(),
             params,
             zero: proto.lift(0.0),
             x: s.x.to_vec(),
@@ -160,9 +163,14 @@ impl<R: PairSum> Lifted<R> {
         )
     }
 
-    /// H = T + V (every term of the vocabulary so far has a velocity-independent potential).
+    /// H = T + V (every term of the vocabulary so far has a velocity-independent potential),
+    /// and with a thermostat chain H′ = H + the chain's share.
     pub fn energy(&self, model: &Model) -> R {
-        self.kinetic() + self.potential(model)
+        let h = self.kinetic() + self.potential(model);
+        match &model.thermostat {
+            Some(chain) => h + chain.energy(&self.links, &self.zero),
+            None => h,
+        }
     }
 
     /// The rate 2·ΣF at which the dissipative terms remove energy, and which terms do.
@@ -343,6 +351,7 @@ mod tests {
                 TermInstance { kind: Kind::Gravity, sites: vec![], params: vec![0.7] },
             ],
             constraints: vec![],
+            thermostat: None,
         }
     }
 
@@ -356,7 +365,7 @@ mod tests {
         fn interval_encloses_mpfr(x in prop::array::uniform3(coord()), v in prop::array::uniform3(coord()),
                                   k in 0.1f64..100.0, r0 in 0.0f64..3.0, gamma in 0.0f64..2.0, g in 0.0f64..20.0) {
             let m = model(k, r0, gamma, g);
-            let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
+            let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
             let iv = Lifted::new(&m, &s, &Outward::NAN);
             let hp = Lifted::new(&m, &s, &Float::new(256));
             let inside = |i: Outward, f: Float| {
@@ -394,6 +403,7 @@ mod tests {
             bodies: vec![body; 2197],
             terms: vec![TermInstance { kind: Kind::LennardJonesShifted, sites: vec![], params: vec![1.0, 1.0, 2.5] }],
             constraints: vec![],
+            thermostat: None,
         };
         let jitter = |k: usize| ((k * 7919 % 1000) as f64 / 1000.0 - 0.5) * 0.2;
         let x = (0..2197).map(|k| [k % 13, k / 13 % 13, k / 169].map(|c| c as f64 * 1.1 + jitter(k + c))).collect();
@@ -406,7 +416,7 @@ mod tests {
     #[test]
     fn pair_sums_are_the_same_bits_on_any_thread_count() {
         let (m, x, v) = liquid();
-        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
         let on = |n| Lifted::new(&m, &s, &Outward::NAN).on_threads(n).energy(&m);
         let one = on(1);
         assert!(x.len() > 4 * CHUNK, "several chunks");
@@ -425,7 +435,7 @@ mod tests {
     #[test]
     fn pairs_in_lanes_add_up_to_the_same_bits() {
         let (m, x, v) = liquid();
-        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v }, &Outward::NAN);
+        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] }, &Outward::NAN);
         let (t, p) = (&m.terms[0], &q.params[0]);
         let pairs = crate::broad_phase::within(&x, &m.cell, asked_reach(t));
         let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
@@ -444,11 +454,12 @@ mod tests {
         let (m, x, v) = liquid();
         let earlier: Vec<[f64; 3]> =
             x.iter().zip(&v).map(|(p, u)| std::array::from_fn(|a| p[a] - 0.5 * u[a])).collect();
-        let ahead: Arc<[Foreseen]> = foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v }).into();
+        let ahead: Arc<[Foreseen]> = foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[] }).into();
         assert_eq!(ahead.len(), 1);
         let bits = |x: &[[f64; 3]], ahead: Arc<[Foreseen]>| {
-            let e =
-                Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v }, &Outward::NAN).foreseeing(ahead).energy(&m);
+            let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[] }, &Outward::NAN)
+                .foreseeing(ahead)
+                .energy(&m);
             (e.bounds().0.to_bits(), e.bounds().1.to_bits())
         };
         assert_eq!(bits(&x, ahead.clone()), bits(&x, Arc::default()));
@@ -462,7 +473,7 @@ mod tests {
         let m = model(2.0, 2.0, 0.0, 0.0);
         let x = [[-1.35, 0.0, 0.0], [1.35, 0.0, 0.0], [0.0, 100.0, 0.0]];
         let v = [[0.0; 3]; 3];
-        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v };
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
         let l = Lifted::new(&Model { terms: m.terms[..1].to_vec(), ..m.clone() }, &s, &0.0f64);
         assert!((l.potential(&Model { terms: m.terms[..1].to_vec(), ..m }) - 0.49).abs() < 1e-15);
     }

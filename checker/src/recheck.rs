@@ -36,7 +36,8 @@ pub fn recheck(c: &Certificate, states: Option<&States>) -> Result<Recheck, Stri
         }
         None => redecide(c, &mut disagreements),
     };
-    let lines = lines(&verdicts, &c.claims, &balance_terms(&c.model, is_balance(&c.model, &c.claims)));
+    let dissipators = balance_terms(&c.model, is_balance(&c.model, &c.claims));
+    let lines = lines(&verdicts, &c.claims, &dissipators, c.model.thermostat.is_some());
     if let Some((i, (a, b))) = lines.iter().zip(&c.verdicts).enumerate().find(|(_, (a, b))| a != b) {
         disagreements.push(format!("verdict {}: re-derived `{a}`, recorded `{b}`", i + 1));
     }
@@ -47,6 +48,9 @@ pub fn recheck(c: &Certificate, states: Option<&States>) -> Result<Recheck, Stri
 fn replay(c: &Certificate, s: &States) -> Result<(Vec<Verdict>, Vec<Trail>), String> {
     if s.bodies != c.model.bodies.len() {
         return Err(format!("the state file has {} bodies, the model {}", s.bodies, c.model.bodies.len()));
+    }
+    if s.links != c.model.links() {
+        return Err(format!("the state file has {} thermostat links, the model {}", s.links, c.model.links()));
     }
     if c.states_checksum.as_ref().is_some_and(|sum| *sum != label(s.checksum)) {
         return Err("the state file is not the one written with this certificate (checksums differ)".into());

@@ -41,10 +41,13 @@ pub fn up(x: f64) -> String {
     format!("{m:.1}e{}{:02}", if e < 0 { '-' } else { '+' }, e.unsigned_abs())
 }
 
-/// The quantity a claim bounds, as printed: e.g. `|ΔH|/|H₀|`.
-fn measure(kind: ClaimKind, balance: bool) -> &'static str {
+/// The quantity a claim bounds, as printed: e.g. `|ΔH|/|H₀|`; H′ is a thermostat's extended
+/// energy.
+fn measure(kind: ClaimKind, balance: bool, extended: bool) -> &'static str {
     match kind {
+        ClaimKind::EnergyConservation if balance && extended => "|H′+Q−H′₀|/|H′₀|",
         ClaimKind::EnergyConservation if balance => "|H+Q−H₀|/|H₀|",
+        ClaimKind::EnergyConservation if extended => "|ΔH′|/|H′₀|",
         ClaimKind::EnergyConservation => "|ΔH|/|H₀|",
         ClaimKind::MomentumConservation => "|ΔP|",
         ClaimKind::AngularMomentumConservation => "|ΔL|",
@@ -55,26 +58,31 @@ fn measure(kind: ClaimKind, balance: bool) -> &'static str {
 }
 
 /// The verdict line of every claim, in the order of the claims: what `lagra run` prints and
-/// what a re-check must reproduce. `dissipators` name the terms an energy balance accounts for.
-pub fn lines(verdicts: &[Verdict], claims: &[Claim], dissipators: &[Kind]) -> Vec<String> {
+/// what a re-check must reproduce. `dissipators` name the terms an energy balance accounts for;
+/// `extended`: the energy is a thermostat's extended H′ = H + the chain's share.
+pub fn lines(verdicts: &[Verdict], claims: &[Claim], dissipators: &[Kind], extended: bool) -> Vec<String> {
     let names: Vec<&str> = dissipators.iter().map(|k| k.name()).collect();
     verdicts
         .iter()
         .zip(claims)
-        .map(|(v, c)| line(v, c, if c.kind == ClaimKind::EnergyConservation { &names } else { &[] }))
+        .map(|(v, c)| line(v, c, if c.kind == ClaimKind::EnergyConservation { &names } else { &[] }, extended))
         .collect()
 }
 
 /// One verdict line.
-fn line(v: &Verdict, c: &Claim, balance: &[&str]) -> String {
+fn line(v: &Verdict, c: &Claim, balance: &[&str], extended: bool) -> String {
     let name = c.label();
-    let q = measure(c.kind, !balance.is_empty());
+    let extended = extended && c.kind == ClaimKind::EnergyConservation;
+    let q = measure(c.kind, !balance.is_empty(), extended);
     let tol = |t: f64| match (c.kind, c.tol) {
         (ClaimKind::Distance, _) => "0".to_string(),
         (_, Some(_)) => format!("tol {}", sci(t)),
         (_, None) => format!("round-off budget {}", up(t)),
     };
-    let via = if balance.is_empty() { String::new() } else { format!(", Q dissipated by {}", balance.join(", ")) };
+    let mut via = if balance.is_empty() { String::new() } else { format!(", Q dissipated by {}", balance.join(", ")) };
+    if extended {
+        via += ", H′ = H + the Nosé–Hoover chain's energy";
+    }
     match (v, &c.between) {
         (Verdict::Pass(_), _) if c.kind == ClaimKind::DimensionalConsistency => {
             format!("{name} PASS  every term is homogeneous and energy-valued")

@@ -94,6 +94,7 @@ fn model() -> Model {
             TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -1.0, 0.0] },
         ],
         constraints: vec![],
+        thermostat: None,
     }
 }
 
@@ -116,7 +117,7 @@ proptest! {
     ) {
         let m = model();
         let x1: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|c| x0[i][c] + nudge[i][c]));
-        let (a, b) = (Snapshot { step: 0, t: 0.0, x: &x0, v: &v0 }, Snapshot { step: 1, t: 1.0, x: &x1, v: &v0 });
+        let (a, b) = (Snapshot { step: 0, t: 0.0, x: &x0, v: &v0, chain: &[] }, Snapshot { step: 1, t: 1.0, x: &x1, v: &v0, chain: &[] });
         let exact = drift(&m, &a, &b);
         // a tolerance around the true drift, where the decision is hardest
         let tol = exact.to_f64() * scale;
@@ -143,7 +144,7 @@ fn certificate() -> String {
     let x = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.0, 0.0]];
     let v = [[0.0; 3]; 3];
     for step in 0..=1 {
-        mon.observe(&Snapshot { step, t: step as f64, x: &x, v: &v }).unwrap();
+        mon.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
     }
     let out = mon.finish();
     Certificate {

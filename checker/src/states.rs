@@ -4,30 +4,43 @@
 //! Layout, all integers and floats little-endian:
 //! `lagra-states/1\0\0` (16 bytes), bodies (u64), then per state: step (u64), t (f64),
 //! positions (3·bodies f64), velocities (3·bodies f64); then the number of states (u64) and
-//! the FNV-1a 64 checksum (u64) of every byte before it.
+//! the FNV-1a 64 checksum (u64) of every byte before it. A model with a thermostat chain writes
+//! `lagra-states/2\0\0`, bodies (u64), links (u64), and after each state's velocities its
+//! links' (η, ξ) (2·links f64).
 
 use crate::checksum::Fnv;
 use crate::model::Snapshot;
 use std::io::{self, Write};
 
 pub const MAGIC: &[u8; 16] = b"lagra-states/1\0\0";
-const HEADER: u64 = 16 + 8;
+/// The magic of a file whose states also hold thermostat links.
+pub const MAGIC_LINKED: &[u8; 16] = b"lagra-states/2\0\0";
 const TRAILER: u64 = 16;
 
-/// The exact length of a file of `count` states of `bodies` bodies, or `None` if it does not
-/// fit in a u64.
-pub fn file_len(bodies: u64, count: u64) -> Option<u64> {
-    record_len(bodies)?.checked_mul(count)?.checked_add(HEADER + TRAILER)
+/// Magic and counts: bodies, and links after them in the linked format.
+fn header(links: u64) -> u64 {
+    if links == 0 {
+        16 + 8
+    } else {
+        16 + 16
+    }
 }
 
-fn record_len(bodies: u64) -> Option<u64> {
-    bodies.checked_mul(48)?.checked_add(16)
+/// The exact length of a file of `count` states of `bodies` bodies and `links` thermostat
+/// links, or `None` if it does not fit in a u64.
+pub fn file_len(bodies: u64, links: u64, count: u64) -> Option<u64> {
+    record_len(bodies, links)?.checked_mul(count)?.checked_add(header(links) + TRAILER)
 }
 
-/// The number of states in a file of `len` bytes for `bodies` bodies, if the length fits.
-pub fn count_for(bodies: u64, len: u64) -> Option<u64> {
-    let record = record_len(bodies)?;
-    let body = len.checked_sub(HEADER + TRAILER)?;
+fn record_len(bodies: u64, links: u64) -> Option<u64> {
+    bodies.checked_mul(48)?.checked_add(links.checked_mul(16)?)?.checked_add(16)
+}
+
+/// The number of states in a file of `len` bytes for `bodies` bodies and `links` links, if the
+/// length fits.
+pub fn count_for(bodies: u64, links: u64, len: u64) -> Option<u64> {
+    let record = record_len(bodies, links)?;
+    let body = len.checked_sub(header(links) + TRAILER)?;
     (body % record == 0).then_some(body / record)
 }
 
@@ -35,12 +48,12 @@ pub fn count_for(bodies: u64, len: u64) -> Option<u64> {
 /// length is given exactly when it fits, and it gives the count back. One property body, run by
 /// proptest and exhaustively here and by Kani where Kani is installed (`proofs`).
 #[cfg(any(test, kani, kani_typecheck))]
-pub fn lengths_are_exact(bodies: u64, count: u64) -> bool {
-    // (2⁶⁴·48 + 16)·2⁶⁴ overflows even u128: the oracle checks its own arithmetic too (Kani would)
-    let record = u128::from(bodies) * 48 + 16;
-    let exact = record.checked_mul(u128::from(count)).and_then(|b| b.checked_add(u128::from(HEADER + TRAILER)));
-    match file_len(bodies, count) {
-        Some(len) => exact == Some(u128::from(len)) && count_for(bodies, len) == Some(count),
+pub fn lengths_are_exact(bodies: u64, links: u64, count: u64) -> bool {
+    // (2⁶⁴·64 + 16)·2⁶⁴ overflows even u128: the oracle checks its own arithmetic too (Kani would)
+    let record = u128::from(bodies) * 48 + u128::from(links) * 16 + 16;
+    let exact = record.checked_mul(u128::from(count)).and_then(|b| b.checked_add(u128::from(header(links) + TRAILER)));
+    match file_len(bodies, links, count) {
+        Some(len) => exact == Some(u128::from(len)) && count_for(bodies, links, len) == Some(count),
         None => exact.is_none_or(|e| e > u128::from(u64::MAX)) || record > u128::from(u64::MAX),
     }
 }
@@ -53,15 +66,15 @@ mod proofs {
 
     #[cfg_attr(kani, kani::proof)]
     pub fn lengths_are_exact_for_every_u64() {
-        assert!(super::lengths_are_exact(any(), any()));
+        assert!(super::lengths_are_exact(any(), any(), any()));
     }
 
-    /// Any length the reader accepts for any body count holds whole states.
+    /// Any length the reader accepts for any body and link count holds whole states.
     #[cfg_attr(kani, kani::proof)]
     pub fn an_accepted_length_holds_whole_states() {
-        let (bodies, len): (u64, u64) = (any(), any());
-        if let Some(count) = super::count_for(bodies, len) {
-            assert_eq!(super::file_len(bodies, count), Some(len));
+        let (bodies, links, len): (u64, u64, u64) = (any(), any(), any());
+        if let Some(count) = super::count_for(bodies, links, len) {
+            assert_eq!(super::file_len(bodies, links, count), Some(len));
         }
     }
 }
@@ -70,14 +83,18 @@ pub struct StateWriter<W: Write> {
     w: W,
     hash: Fnv,
     bodies: usize,
+    links: usize,
     count: u64,
 }
 
 impl<W: Write> StateWriter<W> {
-    pub fn new(w: W, bodies: usize) -> io::Result<Self> {
-        let mut s = StateWriter { w, hash: Fnv::default(), bodies, count: 0 };
-        s.put(MAGIC)?;
+    pub fn new(w: W, bodies: usize, links: usize) -> io::Result<Self> {
+        let mut s = StateWriter { w, hash: Fnv::default(), bodies, links, count: 0 };
+        s.put(if links == 0 { MAGIC } else { MAGIC_LINKED })?;
         s.put(&(bodies as u64).to_le_bytes())?;
+        if links > 0 {
+            s.put(&(links as u64).to_le_bytes())?;
+        }
         Ok(s)
     }
 
@@ -87,13 +104,13 @@ impl<W: Write> StateWriter<W> {
     }
 
     pub fn push(&mut self, s: &Snapshot) -> io::Result<()> {
-        if s.x.len() != self.bodies || s.v.len() != self.bodies {
+        if s.x.len() != self.bodies || s.v.len() != self.bodies || s.chain.len() != self.links {
             return Err(io::Error::other("a state of the wrong size"));
         }
-        let mut rec = Vec::with_capacity(16 + 48 * self.bodies);
+        let mut rec = Vec::with_capacity(16 + 48 * self.bodies + 16 * self.links);
         rec.extend(s.step.to_le_bytes());
         rec.extend(s.t.to_le_bytes());
-        for c in s.x.iter().chain(s.v).flatten() {
+        for c in s.x.iter().chain(s.v).flatten().chain(s.chain.iter().flatten()) {
             rec.extend(c.to_le_bytes());
         }
         self.count += 1;
@@ -115,6 +132,7 @@ impl<W: Write> StateWriter<W> {
 pub struct States {
     bytes: Vec<u8>,
     pub bodies: usize,
+    pub links: usize,
     pub count: u64,
     pub checksum: u64,
 }
@@ -126,11 +144,13 @@ pub struct State {
     pub t: f64,
     pub x: Vec<[f64; 3]>,
     pub v: Vec<[f64; 3]>,
+    /// A thermostat chain's links (η_j, ξ_j), empty without one.
+    pub chain: Vec<[f64; 2]>,
 }
 
 impl State {
     pub fn snapshot(&self) -> Snapshot<'_> {
-        Snapshot { step: self.step, t: self.t, x: &self.x, v: &self.v }
+        Snapshot { step: self.step, t: self.t, x: &self.x, v: &self.v, chain: &self.chain }
     }
 }
 
@@ -143,12 +163,17 @@ fn u64_at(b: &[u8], at: usize) -> u64 {
 impl States {
     pub fn read(bytes: Vec<u8>) -> Result<States, String> {
         let len = bytes.len() as u64;
-        if len < HEADER + TRAILER || &bytes[..16] != MAGIC {
-            return Err("not a lagra state file (lagra-states/1): bad header or too short".into());
+        let linked = bytes.len() >= 16 && &bytes[..16] == MAGIC_LINKED;
+        if len < header(linked as u64) + TRAILER || !(linked || &bytes[..16] == MAGIC) {
+            return Err("not a lagra state file (lagra-states/1 or /2): bad header or too short".into());
         }
         let bodies = u64_at(&bytes, 16);
-        let count = count_for(bodies, len).ok_or_else(|| {
-            format!("state file of {len} bytes cannot hold whole states of {bodies} bodies: truncated or corrupt")
+        let links = if linked { u64_at(&bytes, 24) } else { 0 };
+        if linked && links == 0 {
+            return Err("state file in the linked format holds no thermostat link: corrupt".into());
+        }
+        let count = count_for(bodies, links, len).ok_or_else(|| {
+            format!("state file of {len} bytes cannot hold whole states of {bodies} bodies and {links} thermostat links: truncated or corrupt")
         })?;
         let n = bytes.len();
         let (said, sum) = (u64_at(&bytes, n - 16), u64_at(&bytes, n - 8));
@@ -159,17 +184,26 @@ impl States {
             return Err("state file checksum does not match its contents".into());
         }
         let bodies = usize::try_from(bodies).map_err(|_| "too many bodies for this machine".to_string())?;
-        Ok(States { bytes, bodies, count, checksum: sum })
+        let links = usize::try_from(links).map_err(|_| "too many links for this machine".to_string())?;
+        Ok(States { bytes, bodies, links, count, checksum: sum })
     }
 
     pub fn iter(&self) -> impl Iterator<Item = State> + '_ {
-        let record = 16 + 48 * self.bodies;
+        let record = 16 + 48 * self.bodies + 16 * self.links;
         let f = |b: &[u8], at: usize| f64::from_bits(u64_at(b, at));
-        self.bytes[HEADER as usize..self.bytes.len() - TRAILER as usize].chunks_exact(record).map(move |r| {
-            let vec3 = |base: usize| -> Vec<[f64; 3]> {
-                (0..self.bodies).map(|i| std::array::from_fn(|c| f(r, base + 8 * (3 * i + c)))).collect()
-            };
-            State { step: u64_at(r, 0), t: f(r, 8), x: vec3(16), v: vec3(16 + 24 * self.bodies) }
+        let start = header(self.links as u64) as usize;
+        self.bytes[start..self.bytes.len() - TRAILER as usize].chunks_exact(record).map(move |r| {
+            fn vecs<const N: usize>(n: usize, at: impl Fn(usize) -> f64) -> Vec<[f64; N]> {
+                (0..n).map(|i| std::array::from_fn(|c| at(N * i + c))).collect()
+            }
+            let from = |base: usize| move |k: usize| f(r, base + 8 * k);
+            State {
+                step: u64_at(r, 0),
+                t: f(r, 8),
+                x: vecs(self.bodies, from(16)),
+                v: vecs(self.bodies, from(16 + 24 * self.bodies)),
+                chain: vecs(self.links, from(16 + 48 * self.bodies)),
+            }
         })
     }
 }
@@ -181,9 +215,9 @@ mod tests {
 
     fn file(states: &[(u64, f64, [f64; 3], [f64; 3])]) -> Vec<u8> {
         let mut out = vec![];
-        let mut w = StateWriter::new(&mut out, 1).unwrap();
+        let mut w = StateWriter::new(&mut out, 1, 0).unwrap();
         for (step, t, x, v) in states {
-            w.push(&Snapshot { step: *step, t: *t, x: &[*x], v: &[*v] }).unwrap();
+            w.push(&Snapshot { step: *step, t: *t, x: &[*x], v: &[*v], chain: &[] }).unwrap();
         }
         w.finish().unwrap();
         out
@@ -193,15 +227,24 @@ mod tests {
     fn lengths_are_exact_on_small_and_boundary_values() {
         for bodies in 0..2048 {
             for count in 0..2048 {
-                assert!(lengths_are_exact(bodies, count));
+                assert!(lengths_are_exact(bodies, 0, count));
             }
         }
-        // around where record·count + 40 stops fitting in a u64
+        for bodies in 0..256 {
+            for links in 1..8 {
+                for count in 0..256 {
+                    assert!(lengths_are_exact(bodies, links, count));
+                }
+            }
+        }
+        // around where record·count + header + trailer stops fitting in a u64
         let edges = |m: u64| [0, 1, 2, m.saturating_sub(1), m, m.saturating_add(1), u64::MAX - 1, u64::MAX];
         for bodies in edges((u64::MAX - 16) / 48) {
-            let record = bodies.saturating_mul(48).saturating_add(16);
-            for count in edges((u64::MAX - 40) / record.max(1)) {
-                assert!(lengths_are_exact(bodies, count), "{bodies} {count}");
+            for links in edges((u64::MAX - 16) / 16) {
+                let record = bodies.saturating_mul(48).saturating_add(links.saturating_mul(16)).saturating_add(16);
+                for count in edges((u64::MAX - 48) / record.max(1)) {
+                    assert!(lengths_are_exact(bodies, links, count), "{bodies} {links} {count}");
+                }
             }
         }
     }
@@ -216,6 +259,31 @@ mod tests {
             assert!(a.x[0].iter().zip(&b.2).all(|(p, q)| p.to_bits() == q.to_bits()));
             assert!(a.v[0].iter().zip(&b.3).all(|(p, q)| p.to_bits() == q.to_bits()));
         }
+    }
+
+    #[test]
+    fn thermostat_links_round_trip_after_the_velocities() {
+        let chain = [[0.25, -1e-300], [f64::MIN_POSITIVE, 3.0]];
+        let mut out = vec![];
+        let mut w = StateWriter::new(&mut out, 1, 2).unwrap();
+        w.push(&Snapshot { step: 7, t: 0.5, x: &[[1.0; 3]], v: &[[2.0; 3]], chain: &chain }).unwrap();
+        assert!(w.push(&Snapshot { step: 8, t: 0.5, x: &[[1.0; 3]], v: &[[2.0; 3]], chain: &[] }).is_err());
+        w.finish().unwrap();
+        assert_eq!(&out[..16], MAGIC_LINKED);
+        let read = States::read(out.clone()).unwrap();
+        assert_eq!((read.bodies, read.links, read.count), (1, 2, 1));
+        let s = read.iter().next().unwrap();
+        assert_eq!((s.step, s.x, s.v), (7, vec![[1.0; 3]], vec![[2.0; 3]]));
+        assert_eq!(
+            s.chain.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>(),
+            chain.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>()
+        );
+        // claiming no links in the linked format is corrupt, whatever the checksum says
+        let mut none = out[..24].to_vec();
+        none.extend(0u64.to_le_bytes());
+        none.extend(0u64.to_le_bytes());
+        none.extend(Fnv::of(&none).to_le_bytes());
+        assert!(States::read(none).unwrap_err().contains("no thermostat link"));
     }
 
     #[test]
@@ -254,15 +322,16 @@ mod tests {
         fn the_reader_never_panics(bytes in prop::collection::vec(any::<u8>(), 0..512), keep_magic in any::<bool>()) {
             let mut b = bytes;
             if keep_magic && b.len() >= 16 {
-                b[..16].copy_from_slice(MAGIC);
+                let linked = b[16..].first().is_some_and(|c| c % 2 == 1);
+                b[..16].copy_from_slice(if linked { MAGIC_LINKED } else { MAGIC });
             }
             let _ = States::read(b);
         }
 
         #[test]
-        fn lengths_are_exact_for_random_u64(bodies: u64, count: u64) {
-            prop_assert!(lengths_are_exact(bodies, count));
-            prop_assert!(lengths_are_exact(bodies >> 20, count >> 40));
+        fn lengths_are_exact_for_random_u64(bodies: u64, links: u64, count: u64) {
+            prop_assert!(lengths_are_exact(bodies, links, count));
+            prop_assert!(lengths_are_exact(bodies >> 20, links >> 60, count >> 40));
         }
     }
 }

@@ -299,6 +299,7 @@ mod tests {
             bodies: (0..n).map(|i| Body { mass: 1.0 + i as f64, charge: 0.0, colour: [0.0; 2] }).collect(),
             terms: vec![],
             constraints: (1..n).map(|i| Constraint { bodies: [i - 1, i], length: 1.0 }).collect(),
+            thermostat: None,
         }
     }
 

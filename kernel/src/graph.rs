@@ -111,6 +111,14 @@ impl LagrangianGraph {
         self.evaluate(s, f, true, Which::Positional)
     }
 
+    /// The virial W = Σ r·F of every group (`Force::virial`), for the pressure; `None` if a
+    /// group acts from outside (a field).
+    pub fn virial(&self, s: &State) -> Option<Result<f64, Singularity>> {
+        let frame = self.frame_parts().frame(s);
+        let each: Option<Vec<_>> = self.groups.iter().map(|(_, g)| g.virial(&frame)).collect();
+        Some(each?.into_iter().collect::<Result<Sum, _>>().map(|w| w.value()))
+    }
+
     /// Each body's ω from the gyroscopic groups (F = m ω × v), into `w`.
     pub fn gyration(&self, s: &State, w: &mut [[f64; 3]]) {
         w.iter_mut().for_each(|wi| *wi = [0.0; 3]);
@@ -237,7 +245,7 @@ mod tests {
                solver { dt: 0.005, steps: 1 } }",
         )
         .unwrap();
-        let mut s = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
+        let mut s = scene.start();
         s.x.iter_mut().zip(&s.v).for_each(|(x, v)| (0..3).for_each(|c| x[c] += 0.02 * v[c] - 40.0));
         (scene.model, s)
     }

@@ -2,6 +2,7 @@
 //! along the run: the damped oscillator's period and Kepler's third law. These are measured
 //! agreements (the integrator's error), not certified claims.
 
+use crate::thermostat::Bath;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Kind;
 use nalgebra::Vector3;
@@ -16,7 +17,8 @@ pub enum PredictionKind {
     /// Two bodies under Newtonian gravity: T = 2π√(a³/G(m₀+m₁)), a from the vis-viva equation.
     KeplerPeriod,
     /// Equilibrium: over the second half of the run each axis carries the same kinetic energy
-    /// on average; the ratio of the largest to the smallest, predicted 1.
+    /// on average; the ratio of the largest to the smallest, predicted 1. Under a thermostat:
+    /// the kinetic temperature 2⟨T⟩/N_f over the second half, predicted the bath's kT.
     Equipartition,
     /// Bounded motion: 2⟨T⟩ = −⟨Σ x·F⟩ over the run (the virial theorem); predicted ratio 1.
     /// Exact for time averages over whole periods, or long enough.
@@ -27,8 +29,9 @@ pub enum PredictionKind {
     /// across the field once it has turned fully.
     CyclotronRadius,
     /// Statistical: at the end of the run the velocity components, relative to the centre of
-    /// mass and scaled by √(m/T) at the measured kinetic temperature T, pass a Kolmogorov–Smirnov
-    /// test against the standard normal distribution (p ≥ tol, 0.01 if not given).
+    /// mass and scaled by √(m/T) at the measured kinetic temperature T (the bath's, under a
+    /// thermostat), pass a Kolmogorov–Smirnov test against the standard normal distribution
+    /// (p ≥ tol, 0.01 if not given).
     MaxwellBoltzmann,
 }
 
@@ -70,8 +73,17 @@ impl PredictionKind {
     }
 
     /// The predicted value (`None` for a statistical test), or why the prediction does not apply.
-    pub fn predict(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<Option<f64>, String> {
-        self.closed_form(model, x0, v0)
+    pub fn predict(
+        self,
+        model: &Model,
+        x0: &[[f64; 3]],
+        v0: &[[f64; 3]],
+        bath: Option<Bath>,
+    ) -> Result<Option<f64>, String> {
+        match (self, bath) {
+            (PredictionKind::Equipartition, Some(b)) if model.bodies.len() >= 10 => Ok(Some(b.kt)),
+            _ => self.closed_form(model, x0, v0),
+        }
     }
 
     fn closed_form(self, model: &Model, x0: &[[f64; 3]], v0: &[[f64; 3]]) -> Result<Option<f64>, String> {
@@ -151,16 +163,16 @@ pub enum Meter {
     /// Completed turns of body 0's velocity about the magnetic field, and the extent of its
     /// orbit across the field (the positions' least and greatest along a fixed in-plane axis).
     Gyrations { normal: Vector3<f64>, winding: Winding, extent: (f64, f64), radius: bool },
-    /// Kinetic energy along each axis, at every state of the run.
-    Axes { masses: Vec<f64>, per_state: Vec<[f64; 3]> },
+    /// Kinetic energy along each axis, at every state of the run (and the bath, if any).
+    Axes { masses: Vec<f64>, per_state: Vec<[f64; 3]>, bath: Option<Bath> },
     /// Running sums of 2T and of −Σ x·F over the states of the run.
     Virial { masses: Vec<f64>, kinetic: f64, virial: f64, states: u64 },
-    /// The first and the last velocities, and the masses.
-    Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64> },
+    /// The first and the last velocities, the masses, and the bath's kT if any.
+    Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64>, kt: Option<f64> },
 }
 
 impl Meter {
-    pub fn new(p: &Prediction, model: &Model) -> Meter {
+    pub fn new(p: &Prediction, model: &Model, bath: Option<Bath>) -> Meter {
         match p.kind {
             PredictionKind::OscillatorPeriod => {
                 let b = &model.terms[0];
@@ -176,7 +188,7 @@ impl Meter {
             }
             PredictionKind::KeplerPeriod => Meter::Revolutions(Winding::default()),
             PredictionKind::Equipartition => {
-                Meter::Axes { masses: model.bodies.iter().map(|b| b.mass).collect(), per_state: vec![] }
+                Meter::Axes { masses: model.bodies.iter().map(|b| b.mass).collect(), per_state: vec![], bath }
             }
             PredictionKind::Virial => Meter::Virial {
                 masses: model.bodies.iter().map(|b| b.mass).collect(),
@@ -197,7 +209,8 @@ impl Meter {
                 }
             }
             PredictionKind::MaxwellBoltzmann => {
-                Meter::Velocities { first: None, last: vec![], masses: model.bodies.iter().map(|b| b.mass).collect() }
+                let masses = model.bodies.iter().map(|b| b.mass).collect();
+                Meter::Velocities { first: None, last: vec![], masses, kt: bath.map(|b| b.kt) }
             }
         }
     }
@@ -205,7 +218,7 @@ impl Meter {
     /// One state of the run: time, positions, velocities, and the forces there.
     pub fn observe(&mut self, t: f64, x: &[[f64; 3]], v: &[[f64; 3]], f: &[[f64; 3]]) {
         match self {
-            Meter::Axes { masses, per_state } => {
+            Meter::Axes { masses, per_state, .. } => {
                 let along = |a: usize| v.iter().zip(masses.iter()).map(|(v, m)| 0.5 * m * v[a] * v[a]).sum::<f64>();
                 per_state.push([along(0), along(1), along(2)]);
             }
@@ -254,9 +267,9 @@ impl Meter {
     /// The measured value (a period, or a statistical test's p-value) and, for a test, what it
     /// saw; `None` if the run saw too little.
     pub fn measured(&self) -> Option<(f64, Option<String>)> {
-        if let Meter::Velocities { first: Some(first), last, masses } = self {
-            let (d, p, t) = ks_maxwell_boltzmann(last, masses);
-            let (_, p0, _) = ks_maxwell_boltzmann(first, masses);
+        if let Meter::Velocities { first: Some(first), last, masses, kt } = self {
+            let (d, p, t) = ks_maxwell_boltzmann(last, masses, *kt);
+            let (_, p0, _) = ks_maxwell_boltzmann(first, masses, *kt);
             let n = 3 * last.len();
             return Some((
                 p,
@@ -278,10 +291,13 @@ impl Meter {
             }
             Meter::Revolutions(w) | Meter::Gyrations { winding: w, .. } => w.period(),
             Meter::Virial { kinetic, virial, states, .. } if *states > 1 => Some(kinetic / virial),
-            Meter::Axes { per_state, .. } if per_state.len() >= 20 => {
+            Meter::Axes { per_state, bath, .. } if per_state.len() >= 20 => {
                 let second_half = &per_state[per_state.len() / 2..];
                 let n = second_half.len() as f64;
                 let mean: [f64; 3] = std::array::from_fn(|a| second_half.iter().map(|k| k[a]).sum::<f64>() / n);
+                if let Some(b) = bath {
+                    return Some(2.0 * mean.iter().sum::<f64>() / b.dof);
+                }
                 let (lo, hi) = mean.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &k| (lo.min(k), hi.max(k)));
                 Some(hi / lo)
             }
@@ -332,15 +348,15 @@ impl Winding {
 /// Kolmogorov–Smirnov test of velocities against Maxwell–Boltzmann: each axis on its own (the
 /// distribution is Gaussian along every axis at one temperature), the components relative to the
 /// centre of mass and scaled by √(m/T), T = Σ m|v − v_cm|² / (3N − 3), against the standard
-/// normal. Returns the largest D, the p-value of the three tests together (Bonferroni: three
-/// times the least, at most 1) and T; each p from the asymptotic Kolmogorov distribution with
-/// Stephens' small-sample correction.
-fn ks_maxwell_boltzmann(v: &[[f64; 3]], m: &[f64]) -> (f64, f64, f64) {
+/// normal (or at `kt`, a bath's, if given). Returns the largest D, the p-value of the three
+/// tests together (Bonferroni: three times the least, at most 1) and T; each p from the
+/// asymptotic Kolmogorov distribution with Stephens' small-sample correction.
+fn ks_maxwell_boltzmann(v: &[[f64; 3]], m: &[f64], kt: Option<f64>) -> (f64, f64, f64) {
     let total: f64 = m.iter().sum();
     let cm: [f64; 3] = std::array::from_fn(|c| v.iter().zip(m).map(|(v, m)| m * v[c]).sum::<f64>() / total);
     let twice_kinetic: f64 =
         v.iter().zip(m).map(|(v, m)| m * (0..3).map(|c| (v[c] - cm[c]).powi(2)).sum::<f64>()).sum();
-    let t = twice_kinetic / (3.0 * v.len() as f64 - 3.0);
+    let t = kt.unwrap_or(twice_kinetic / (3.0 * v.len() as f64 - 3.0));
     let (mut worst_d, mut least_p) = (0.0f64, 1.0f64);
     for c in 0..3 {
         let mut z: Vec<f64> = v.iter().zip(m).map(|(v, m)| (v[c] - cm[c]) * (m / t).sqrt()).collect();
@@ -384,7 +400,7 @@ mod tests {
     fn gaussian_velocities_pass_and_uniform_ones_fail() {
         let g = gaussian(3 * 300);
         let v: Vec<[f64; 3]> = g.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let (_, p, _) = ks_maxwell_boltzmann(&v, &vec![1.0; 300]);
+        let (_, p, _) = ks_maxwell_boltzmann(&v, &vec![1.0; 300], None);
         assert!(p > 0.05, "a Gaussian sample is rejected: p = {p}");
         // uniform components of unit variance differ from the normal by D ≈ 0.052: 9000 of them
         // make that unmistakable
@@ -394,7 +410,7 @@ mod tests {
                 [x, -x, x]
             })
             .collect();
-        let (_, p, _) = ks_maxwell_boltzmann(&uniform, &vec![1.0; 3000]);
+        let (_, p, _) = ks_maxwell_boltzmann(&uniform, &vec![1.0; 3000], None);
         assert!(p < 1e-3, "a uniform sample passes: p = {p}");
     }
 }

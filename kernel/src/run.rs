@@ -4,6 +4,7 @@
 
 use crate::checking::{can_overlap, Checking};
 use crate::graph::LagrangianGraph;
+use crate::observables::{Observables, Observer};
 use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
 use crate::solvers::{Iterations, Stepper};
@@ -55,6 +56,8 @@ pub struct Report {
     pub checker: &'static str,
     /// How the iterations inside the solver's steps went (RATTLE, action descent).
     pub iterations: Option<Iterations>,
+    /// The averages after `equilibrate` (a thermostatted scene, or one that asked).
+    pub observables: Option<Observables>,
 }
 
 /// Keeps the states a run produces (the state file's writer).
@@ -92,9 +95,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
     let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
-    let mut state = State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() };
+    let mut state = scene.start();
+    let mut observer = Observer::new(scene, &graph, steps)?;
     let mut meters: Vec<(Meter, &Prediction)> =
-        scene.predictions.iter().map(|p| (Meter::new(p, &scene.model), p)).collect();
+        scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, scene.bath()), p)).collect();
     let tracing = opts.trace.is_some();
     let watched = tracing || opts.record.is_some() || !meters.is_empty();
     let overlap = can_overlap(&scene.model, &scene.claims, watched);
@@ -103,8 +107,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let mut stop: Option<Stop> = None;
     let mut trace = |s: &State, potential: f64| -> Result<(), String> {
         if let Some(w) = opts.trace.as_mut() {
-            let line =
-                TraceLine { step: s.step, t: s.t, energy: kinetic(s, &graph.masses) + potential, x: &s.x, v: &s.v };
+            // H, or with a thermostat chain the H′ the checker certifies
+            let chain = scene.model.thermostat.as_ref().map_or(0.0, |c| c.energy(&s.chain, &0.0));
+            let energy = kinetic(s, &graph.masses) + potential + chain;
+            let line = TraceLine { step: s.step, t: s.t, energy, x: &s.x, v: &s.v };
             serde_json::to_writer(&mut *w, &line).map_err(|e| e.to_string())?;
             writeln!(w).map_err(|e| format!("writing the trace: {e}"))?;
         }
@@ -139,12 +145,18 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         } else {
             Checking::Inline(monitor)
         };
-        match Stepper::new(scene.solver.integrator, scene.solver.settings, &graph, &state) {
+        match Stepper::for_scene(scene, &graph, &state) {
             Err(e) => stop = Some(Stop::Solver { step: 0, message: e.to_string() }),
             Ok(mut solver) => {
                 stop = check(&mut checking, &mut state)?;
                 meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                 trace(&state, solver.potential())?;
+                let sample =
+                    |o: &mut Option<Observer>, s: &State, potential: f64| match o.as_mut().filter(|o| o.due(s.step)) {
+                        Some(o) => o.observe(&graph, s, potential),
+                        None => Ok(()),
+                    };
+                sample(&mut observer, &state, solver.potential())?;
                 let frame = scene.solver.steps_per_frame.max(1);
                 let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
                 while stop.is_none() && state.step < steps {
@@ -152,7 +164,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     let until = if every_step {
                         state.step + 1
                     } else {
-                        checking.next_due(state.step).min(next_frame).min(next(stride, state.step))
+                        let sampled = observer.as_ref().map_or(u64::MAX, |o| o.next_due(state.step));
+                        checking.next_due(state.step).min(next_frame).min(next(stride, state.step)).min(sampled)
                     };
                     if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
                         stop = Some(Stop::Solver { step: state.step + 1, message: e.to_string() });
@@ -163,6 +176,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         stop = non_finite(&state);
                     }
                     meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
+                    if stop.is_none() {
+                        sample(&mut observer, &state, solver.potential())?;
+                    }
                     if tracing && (state.step.is_multiple_of(frame) || state.step == steps) {
                         trace(&state, solver.potential())?;
                     }
@@ -219,5 +235,6 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             "inline, at every checkpoint"
         },
         iterations,
+        observables: observer.and_then(Observer::finish),
     })
 }

@@ -4,6 +4,8 @@
 use crate::lang::Span;
 use crate::predict::Prediction;
 use crate::solvers::{Integrator, Settings};
+use crate::state::State;
+use crate::thermostat::{Bath, Thermostat};
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 
@@ -28,12 +30,26 @@ pub struct NoetherRequest {
 }
 
 impl Scene {
+    /// The state the run starts from: step 0, the initial positions and velocities, a
+    /// thermostat chain at rest.
+    pub fn start(&self) -> State {
+        State { step: 0, t: 0.0, x: self.x0.clone(), v: self.v0.clone(), chain: vec![[0.0; 2]; self.model.links()] }
+    }
+
+    /// The temperature the scene's thermostat holds, if it has one.
+    pub fn bath(&self) -> Option<Bath> {
+        self.thermostat.as_ref().map(|t| Bath::of(t, &self.model))
+    }
+
     /// Works the predictions out again from the model and initial state as they are now (after
     /// a parameter was set): a prediction that no longer applies is an error naming it.
     pub fn repredict(&mut self) -> Result<(), String> {
+        let bath = self.bath();
         for p in &mut self.predictions {
-            p.predicted =
-                p.kind.predict(&self.model, &self.x0, &self.v0).map_err(|why| format!("{}: {why}", p.kind.name()))?;
+            p.predicted = p
+                .kind
+                .predict(&self.model, &self.x0, &self.v0, bath)
+                .map_err(|why| format!("{}: {why}", p.kind.name()))?;
         }
         Ok(())
     }
@@ -56,4 +72,18 @@ pub struct Scene {
     pub noether: Option<NoetherRequest>,
     pub predictions: Vec<Prediction>,
     pub solver: Solver,
+    pub thermostat: Option<Thermostat>,
+    /// What the run measures along the way (after `equilibrate`), if anything.
+    pub sampling: Option<Sampling>,
+}
+
+/// `equilibrate`, `sample_every`, `tail_corrections` in the solver block: the observables are
+/// averaged over the states from time `equilibrate` on, every `every` steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    pub equilibrate: f64,
+    pub every: u64,
+    /// Add each pair term's share beyond its cutoff to the energy and pressure, taking the
+    /// bodies as evenly spread there (g(r) = 1).
+    pub tail_corrections: bool,
 }

@@ -187,7 +187,7 @@ mod tests {
 
     fn model(terms: Vec<TermInstance>, cell: Option<Cell>) -> Model {
         let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2] }; 3];
-        Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![] }
+        Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![], thermostat: None }
     }
 
     fn term(kind: Kind, params: &[f64]) -> TermInstance {

@@ -107,6 +107,14 @@ pub fn pair_sites<R: Part>(r: R, bodies: [R; 4], colour: [[R; 2]; 2]) -> [Site<R
     [at(zero, bodies[0], bodies[2], colour[0]), at(r, bodies[1], bodies[3], colour[1])]
 }
 
+/// V and V′ of a central pair term at distance r (bodies and colours as in `pair_sites`).
+pub fn along(kind: Kind, p: &[f64], bodies: [f64; 4], colour: [[f64; 2]; 2], r: f64) -> (f64, f64) {
+    let params: Vec<Dual<f64>> = p.iter().map(|&x| Dual::constant(x)).collect();
+    let sites = pair_sites(Dual::new(r, 1.0), bodies.map(Dual::constant), colour.map(|k| k.map(Dual::constant)));
+    let v = kind.potential(&params, &refs(&sites));
+    (v.v, v.d)
+}
+
 type D2 = Dual<Dual<f64>>;
 
 /// s and s_r of a central pair term at distance r, from V, V′ and V″ of its definition (one

@@ -433,7 +433,19 @@ mod tests {
             .collect();
         let v = (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-1.0, 1.0))).collect();
         let c = (0..n).map(|_| [rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5)]).collect();
-        Case { model: Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![] }, x, v, c }
+        Case {
+            model: Model {
+                units: UnitSystem::Reduced,
+                cell: None,
+                bodies,
+                terms,
+                constraints: vec![],
+                thermostat: None,
+            },
+            x,
+            v,
+            c,
+        }
     }
 
     /// The fast force at the case moved by h along (dx, dv, dm, dq, dp).

@@ -118,8 +118,14 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     let colour: Vec<[f64; 2]> = (0..n).map(|_| [rng.uniform(-0.5, 0.5), rng.uniform(-0.6, 0.6)]).collect();
     let bodies =
         m.iter().zip(&q).zip(&colour).map(|((&mass, &charge), &colour)| Body { mass, charge, colour }).collect();
-    let model =
-        Model { units: UnitSystem::Reduced, cell: None, bodies, terms: vec![term.clone()], constraints: vec![] };
+    let model = Model {
+        units: UnitSystem::Reduced,
+        cell: None,
+        bodies,
+        terms: vec![term.clone()],
+        constraints: vec![],
+        thermostat: None,
+    };
 
     let mut fast = vec![[0.0; 3]; n];
     let energy = group(kind, &[(0, &term)], &model, &None)

@@ -100,23 +100,7 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         let mut sum = Sum::default();
         for (k, b) in self.sites.iter().enumerate() {
-            // positions relative to the first body, by minimum image in a periodic cell
-            let x: [[f64; 3]; N] = match &self.images {
-                None => std::array::from_fn(|i| s.x[b[i]]),
-                Some(images) => {
-                    let x0 = s.x[b[0]];
-                    std::array::from_fn(|i| {
-                        let d = images.image(sub(&s.x[b[i]], &x0));
-                        [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
-                    })
-                }
-            };
-            // velocities only for a group that reads them (`Bonded::velocity_dependent`)
-            let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
-            let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(|r| r.finite(energy)).map_err(|what| {
-                let far = x.iter().any(|xi| overflowed(&sub(xi, &x[0])));
-                Singularity { term: self.name, bodies: b.to_vec(), what: if far { FAR } else { what } }
-            })?;
+            let (_, fs, e) = self.one(k, s, energy)?;
             for (i, fi) in b.iter().zip(fs) {
                 for c in 0..3 {
                     f[*i][c] += fi[c];
@@ -130,6 +114,13 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
+    }
+    fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>> {
+        let each = |k| {
+            let (x, fs, _) = self.one(k, s, false)?;
+            Ok((0..N).map(|i| (0..3).map(|c| (x[i][c] - x[0][c]) * fs[i][c]).sum::<f64>()).sum::<f64>())
+        };
+        Some((0..self.sites.len()).map(each).collect::<Result<Sum, _>>().map(|w| w.value()))
     }
     fn plan(&self) -> String {
         format!("{} listed instance(s), in order", self.sites.len())
@@ -149,6 +140,33 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
             self.instance(k, s).potential_pullback(s, wanted.of(self.terms[k]), out);
         }
         Ok(())
+    }
+}
+
+impl<T: Bonded<N>, const N: usize> Bonds<T, N> {
+    /// Instance `k`: its bodies' positions (relative to the first, by minimum image in a
+    /// periodic cell), forces and energy.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn one(&self, k: usize, s: &Frame, energy: bool) -> Result<([[f64; 3]; N], [[f64; 3]; N], f64), Singularity> {
+        let b = &self.sites[k];
+        let x: [[f64; 3]; N] = match &self.images {
+            None => std::array::from_fn(|i| s.x[b[i]]),
+            Some(images) => {
+                let x0 = s.x[b[0]];
+                std::array::from_fn(|i| {
+                    let d = images.image(sub(&s.x[b[i]], &x0));
+                    [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]]
+                })
+            }
+        };
+        // velocities only for a group that reads them (`Bonded::velocity_dependent`)
+        let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
+        let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(|r| r.finite(energy)).map_err(|what| {
+            let far = x.iter().any(|xi| overflowed(&sub(xi, &x[0])));
+            Singularity { term: self.name, bodies: b.to_vec(), what: if far { FAR } else { what } }
+        })?;
+        Ok((x, fs, e))
     }
 }
 
@@ -258,6 +276,28 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             }
         }
         Ok(energy)
+    }
+
+    /// The virial −Σ d·F over the listed pairs, in the force loop's order (each pair's eval
+    /// gives zero beyond the cutoff, as there): plain within a body's pairs, compensated across.
+    fn listed_virial(&self, l: &Neighbours, s: &Frame) -> Result<f64, Singularity> {
+        let x = &l.wrapped;
+        let body = |b: usize| l.bodies[b] as usize;
+        let mut w = Sum::default();
+        for p in &self.rows {
+            for i in 0..l.bodies.len() {
+                let mut wi = 0.0;
+                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
+                    let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
+                    let d = [x[j][0] - x[i][0] + sh[0], x[j][1] - x[i][1] + sh[1], x[j][2] - x[i][2] + sh[2]];
+                    let (a, _) = T::eval(p, d, bodies::<T>(s, body(i), body(j)), colour::<T>(s, body(i), body(j)))
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![body(i), body(j)], what })?;
+                    wi -= d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+                }
+                w.add(wi);
+            }
+        }
+        Ok(w.value())
     }
 
     /// Through the Verlet list, split by positions into chunks of about equal pair counts, each
@@ -476,6 +516,24 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         self.traversed(s, &mut scratch)?;
         Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW })
     }
+    fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>> {
+        if let Some(list) = &self.list {
+            let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            l.update(s.x, &self.cell, self.pool.as_deref());
+            return Some(self.listed_virial(&l, s));
+        }
+        let mut w = Sum::default();
+        let visited =
+            self.within_reach(s, |i, j, d| {
+                for p in &self.rows {
+                    let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                    w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+                }
+                Ok(())
+            });
+        Some(visited.map(|_| w.value()))
+    }
     fn velocity_dependent(&self) -> bool {
         false
     }
@@ -626,6 +684,9 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
     }
     fn velocity_dependent(&self) -> bool {
         self.velocity
+    }
+    fn virial(&self, _s: &Frame) -> Option<Result<f64, Singularity>> {
+        None
     }
     fn gyroscopic(&self) -> bool {
         T::GYROSCOPIC

@@ -105,6 +105,11 @@ pub trait Force: Send + Sync {
     }
     /// Adds the group's ω of each body to `w` (nothing for a group that is not gyroscopic).
     fn gyration(&self, _s: &Frame, _w: &mut [[f64; 3]]) {}
+    /// The group's virial W = Σ r·F over its interactions, each seen through the nearest image
+    /// (a pair's −d·F on its first body; a bond's Σ_k (x_k − x_0)·F_k), so that W/3V is its
+    /// share of the pressure. `None` for a group acting from outside (a field), which has no
+    /// virial a periodic box would give meaning to.
+    fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>>;
     /// Adds the derivative of the group's forces along `dir` to `df`, from the definitions.
     fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity>;
     /// Adds the transpose of the forces' derivatives applied to `g` (one covector per body) to
@@ -261,7 +266,7 @@ mod tests {
             (0..n).map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64] }).collect();
         let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
         let terms = vec![TermInstance { kind, sites, params }];
-        (Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![] }, n)
+        (Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![], thermostat: None }, n)
     }
 
     /// Every term at positions `x` (n of them): finite forces and energy, or a clear error.

@@ -97,6 +97,12 @@ impl<'a> Run<'a> {
                 scene.solver.integrator.name()
             ));
         }
+        if let Some(t) = &scene.thermostat {
+            return Err(format!(
+                "gradients go through plain velocity_verlet steps; the adjoint of a {} thermostat is not built yet",
+                t.name()
+            ));
+        }
         let graph = LagrangianGraph::with_threads(&scene.model, r.threads)?;
         let mut wanted = Wanted { params: vec![vec![]; scene.model.terms.len()], masses: false, charges: false };
         for n in r.wrt {
@@ -112,7 +118,7 @@ impl<'a> Run<'a> {
     }
 
     fn start(&self) -> State {
-        State { step: 0, t: 0.0, x: self.scene.x0.clone(), v: self.scene.v0.clone() }
+        self.scene.start()
     }
 
     fn value(&self, objective: &Objective, s: &State, potential: f64) -> f64 {

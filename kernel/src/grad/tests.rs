@@ -222,7 +222,17 @@ fn every_shipped_scene_with_a_parameter() {
             continue;
         }
         let mut scene = compile(&std::fs::read_to_string(&path).unwrap()).unwrap();
-        if scene.solver.integrator != Integrator::VelocityVerlet || !scene.model.constraints.is_empty() {
+        if scene.solver.integrator != Integrator::VelocityVerlet
+            || !scene.model.constraints.is_empty()
+            || scene.thermostat.is_some()
+        {
+            if scene.thermostat.is_some() {
+                let objective = Objective::parse("energy@end", &scene).unwrap();
+                let wrt = params::parse_list("body[0].velocity.x", &scene).unwrap();
+                let request = Request { scene: &scene, objective: &objective, wrt: &wrt, threads: 1, progress: None };
+                let refused = gradient(request, Method::Reverse).map(|_| ()).unwrap_err();
+                assert!(refused.contains("thermostat"), "{}: {refused}", path.display());
+            }
             continue;
         }
         scene.solver.steps = scene.solver.steps.min(100);

@@ -7,8 +7,9 @@ use super::lattice::{self, Draw, Packing};
 use super::{Pair, Rule};
 use crate::constraints::{Constraints, Tolerance};
 use crate::predict::{Prediction, PredictionKind};
-use crate::scene::{NoetherRequest, Scene, Solver};
+use crate::scene::{NoetherRequest, Sampling, Scene, Solver};
 use crate::solvers::{Integrator, Settings};
+use crate::thermostat::{self, Bath, Thermostat};
 use lagra_checker::claims::{Between, Claim, ClaimKind};
 use lagra_checker::model::{Body, Cell, Constraint, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
@@ -37,6 +38,10 @@ const DEFAULT_STEPS: u64 = 5000;
 /// default depends on its constraints), and so are the settings it may take.
 struct SolverBlock {
     integrator: Option<(Integrator, Span)>,
+    /// `equilibrate` (a time), `sample_every`, `tail_corrections`.
+    equilibrate: Option<f64>,
+    sample_every: Option<u64>,
+    tail_corrections: bool,
     /// `tol`, `iterations`, `window`, each with where it was written.
     settings: Vec<(&'static str, f64, Span)>,
     dt: f64,
@@ -64,6 +69,8 @@ struct Compiler<'a> {
     noether: Option<NoetherRequest>,
     predictions: Vec<(PredictionKind, Option<f64>, Span)>,
     solver: Option<SolverBlock>,
+    /// The thermostat as declared: kT, what it is, where.
+    thermostat: Option<(f64, Thermostat, Option<usize>, Span)>,
     /// Each `constraint [i, j] { length }`: its bodies, its length if given, where it stands.
     constraints: Vec<([usize; 2], Option<f64>, Span)>,
     cell: Option<(Cell, Span)>,
@@ -108,6 +115,7 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         noether: None,
         predictions: vec![],
         solver: None,
+        thermostat: None,
         constraints: vec![],
         cell: None,
         term_at: vec![],
@@ -246,6 +254,15 @@ impl<'a> Compiler<'a> {
                 let periodic = b.take("periodic").map(|f| flags::<3>(&f, "box")).transpose()?.unwrap_or([true; 3]);
                 b.check_names("box", &[])?;
                 self.cell = Some((Cell { size: [lengths[0], lengths[1], lengths[2]], periodic }, span));
+                Ok(())
+            }
+            Rule::thermostat => {
+                let kw = next().and(next()).expect("thermostat kind");
+                let block = Block::read(next(), kw.as_span().into())?;
+                if self.thermostat.is_some() {
+                    return err(span, "second thermostat: one per scene");
+                }
+                self.thermostat = Some(self.thermostat(&kw, block)?);
                 Ok(())
             }
             Rule::solver => {
@@ -507,6 +524,41 @@ impl<'a> Compiler<'a> {
         Ok(())
     }
 
+    /// `thermostat nose_hoover { T, tau, chain }` or `thermostat langevin { T, gamma, seed }`:
+    /// T is k_B·T, an energy.
+    #[allow(clippy::type_complexity)]
+    fn thermostat(&self, kw: &Pair, mut b: Block) -> Result<(f64, Thermostat, Option<usize>, Span), Diagnostic> {
+        let at: Span = kw.as_span().into();
+        let name = kw.as_str();
+        let mut need = |field: &str, dim: Dim, what: &str| -> Result<f64, Diagnostic> {
+            let f = b.take(field).ok_or_else(|| Diagnostic::new(at, format!("{name} needs `{field}` ({what})")))?;
+            self.rd.positive(&f, name, dim)
+        };
+        let kt = need("T", Dim::ENERGY, "k_B·T, an energy")?;
+        let (thermostat, links) = match name {
+            "nose_hoover" => {
+                let tau = need("tau", Dim::TIME, "the relaxation time")?;
+                let links = match b.take("chain") {
+                    None => 3,
+                    Some(f) => match self.rd.count(&f, name)? {
+                        n @ 1..=64 => n as usize,
+                        n => return err(value_span(&f), format!("nose_hoover.chain takes 1 to 64 links, got {n}")),
+                    },
+                };
+                b.check_names(name, &["T", "tau", "chain"])?;
+                (Thermostat::NoseHoover { tau }, Some(links))
+            }
+            "langevin" => {
+                let gamma = need("gamma", Dim::TIME.pow(-1), "the friction rate, per time")?;
+                let seed = b.take("seed").map(|f| self.rd.count(&f, name)).transpose()?.unwrap_or(1);
+                b.check_names(name, &["T", "gamma", "seed"])?;
+                (Thermostat::Langevin { kt, gamma, seed }, None)
+            }
+            _ => return err(at, format!("unknown thermostat `{name}`; known: nose_hoover, langevin")),
+        };
+        Ok((kt, thermostat, links, at))
+    }
+
     fn solver(&self, mut b: Block) -> Result<SolverBlock, Diagnostic> {
         let integrator = match b.take("integrator") {
             None => None,
@@ -547,8 +599,37 @@ impl<'a> Compiler<'a> {
                 settings.push((name, n as f64, f.span));
             }
         }
+        let equilibrate = match b.take("equilibrate") {
+            None => None,
+            Some(f) => {
+                let t = self.rd.numbers(&f, "solver", Dim::TIME, 1)?[0];
+                if !(t >= 0.0 && t.is_finite()) {
+                    return err(value_span(&f), format!("solver.equilibrate must be a time ≥ 0, got {t}"));
+                }
+                Some(t)
+            }
+        };
+        let sample_every = b.take("sample_every").map(|f| self.rd.count(&f, "solver")).transpose()?;
+        let tail_corrections = match b.take("tail_corrections") {
+            None => false,
+            Some(f) => match word(&f, "solver")? {
+                ("true", _) => true,
+                ("false", _) => false,
+                (w, at) => return err(at, format!("solver.tail_corrections is true or false, got `{w}`")),
+            },
+        };
         b.check_names("solver", &[])?;
-        Ok(SolverBlock { integrator, settings, dt, steps, steps_per_frame, at: b.span })
+        Ok(SolverBlock {
+            integrator,
+            equilibrate,
+            sample_every,
+            tail_corrections,
+            settings,
+            dt,
+            steps,
+            steps_per_frame,
+            at: b.span,
+        })
     }
 
     /// The integrator the block names, or the one the model needs; its settings, each given one
@@ -576,6 +657,18 @@ impl<'a> Compiler<'a> {
                 _ => settings.window = value as u32,
             }
         }
+        if let Some((_, t, _, _)) = &self.thermostat {
+            if integrator != Integrator::VelocityVerlet {
+                return err(
+                    at,
+                    format!(
+                        "a {} thermostat runs inside velocity_verlet; {} cannot host it",
+                        t.name(),
+                        integrator.name()
+                    ),
+                );
+            }
+        }
         integrator.handles(&self.terms, constrained).map_err(|(term, why)| {
             let wherefrom = term.map(|n| format!(" (line {})", self.term_line[n])).unwrap_or_default();
             Diagnostic::new(at, format!("{why}{wherefrom}"))
@@ -601,8 +694,14 @@ impl<'a> Compiler<'a> {
             }
             out.push(Constraint { bodies: [i, j], length });
         }
-        let model =
-            Model { units: self.rd.system, cell: *cell, bodies: self.bodies.clone(), terms: vec![], constraints: out };
+        let model = Model {
+            units: self.rd.system,
+            cell: *cell,
+            bodies: self.bodies.clone(),
+            terms: vec![],
+            constraints: out,
+            thermostat: None,
+        };
         if let Some(k) = Constraints::of(&model) {
             let tol = Tolerance { tol: settings.tol.min(1e-12), sweeps: settings.iterations.max(1000) };
             let inverse: Vec<f64> = self.bodies.iter().map(|b| 1.0 / b.mass).collect();
@@ -637,6 +736,17 @@ impl<'a> Compiler<'a> {
             reach_within(c, &self.terms, &self.term_at)?;
         }
         let cell = self.cell.map(|c| c.0);
+        let sampling =
+            (self.thermostat.is_some() || block.equilibrate.is_some() || block.sample_every.is_some()).then(|| {
+                Sampling {
+                    equilibrate: block.equilibrate.unwrap_or(0.0),
+                    every: block.sample_every.unwrap_or(10),
+                    tail_corrections: block.tail_corrections,
+                }
+            });
+        if block.tail_corrections && sampling.is_none() {
+            return err(block.at, "tail_corrections apply to the measured observables: give `equilibrate` too");
+        }
         let solver = self.settle(block)?;
         let constraints = self.constrain(&cell, &solver.settings)?;
         for (c, s) in self.claims.iter().zip(&self.claim_spans) {
@@ -644,11 +754,38 @@ impl<'a> Compiler<'a> {
                 return err(*s, "constraint_satisfied: the scene declares no constraint");
             }
         }
-        let model = Model { units: self.rd.system, cell, bodies: self.bodies, terms: self.terms, constraints };
+        let mut model = Model {
+            units: self.rd.system,
+            cell,
+            bodies: self.bodies,
+            terms: self.terms,
+            constraints,
+            thermostat: None,
+        };
+        let thermostat = match self.thermostat {
+            None => None,
+            Some((kt, t, links, at)) => {
+                let dof = match t {
+                    Thermostat::NoseHoover { .. } => thermostat::degrees_of_freedom(&model),
+                    Thermostat::Langevin { .. } => 3.0 * model.bodies.len() as f64,
+                };
+                if dof < 1.0 {
+                    return err(at, format!("{} has no kinetic degree of freedom to hold at a temperature: {} bod{} whose centre of mass the terms keep", t.name(), model.bodies.len(), if model.bodies.len() == 1 { "y" } else { "ies" }));
+                }
+                if let (Thermostat::NoseHoover { tau }, Some(links)) = (&t, links) {
+                    model.thermostat = Some(thermostat::chain(kt, *tau, links, dof));
+                }
+                if let Thermostat::Langevin { .. } = t {
+                    refuse_under_langevin(&self.claims, &self.claim_spans, &self.noether)?;
+                }
+                Some(t)
+            }
+        };
+        let bath = thermostat.as_ref().map(|t| Bath::of(t, &model));
         let predictions = self
             .predictions
             .into_iter()
-            .map(|(kind, tol, s)| match kind.predict(&model, &self.x0, &self.v0) {
+            .map(|(kind, tol, s)| match kind.predict(&model, &self.x0, &self.v0, bath) {
                 Ok(predicted) => Ok(Prediction { kind, tol, predicted }),
                 Err(why) => err(s, format!("{}: {why}", kind.name())),
             })
@@ -666,8 +803,29 @@ impl<'a> Compiler<'a> {
             noether: self.noether,
             predictions,
             solver,
+            thermostat,
+            sampling,
         })
     }
+}
+
+/// A Langevin bath exchanges energy and momentum with the bodies at random: the claims that
+/// they are conserved cannot hold, and the checker would have no record of the noise to state
+/// the balance with, so they are refused where they are declared.
+fn refuse_under_langevin(claims: &[Claim], at: &[Span], noether: &Option<NoetherRequest>) -> Result<(), Diagnostic> {
+    let why = "a Langevin thermostat exchanges energy and momentum with its bath at random, so it cannot be conserved; remove the claim, or use `thermostat nose_hoover`, whose extended energy is certified";
+    for (c, s) in claims.iter().zip(at) {
+        if matches!(
+            c.kind,
+            ClaimKind::EnergyConservation | ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation
+        ) {
+            return err(*s, format!("{}: {why}", c.kind.name()));
+        }
+    }
+    if let Some(n) = noether {
+        return err(n.at, format!("noether: {why}"));
+    }
+    Ok(())
 }
 
 /// In a periodic box a pair term sees only the nearest image of each body: its reach must be

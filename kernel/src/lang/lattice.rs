@@ -91,7 +91,7 @@ pub fn velocities(n: usize, t_over_m: f64, seed: u64, draw: Draw) -> Vec<[f64; 3
     if t_over_m == 0.0 || n < 2 {
         return vec![[0.0; 3]; n];
     }
-    let mut rng = SplitMix(seed);
+    let mut rng = crate::random::SplitMix(seed);
     let mut component = || match draw {
         Draw::Gaussian => rng.normal(),
         Draw::Uniform => 2.0 * rng.uniform() - 1.0,
@@ -103,30 +103,6 @@ pub fn velocities(n: usize, t_over_m: f64, seed: u64, draw: Draw) -> Vec<[f64; 3
     let scale = libm::sqrt(t_over_m * (3 * n - 3) as f64 / sq);
     v.iter_mut().flatten().for_each(|c| *c *= scale);
     v
-}
-
-/// SplitMix64: small, fast, and fully specified, so the draw is the same on every platform.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next() >> 11) + 1) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Standard normal, by Box–Muller.
-    fn normal(&mut self) -> f64 {
-        let (u, w) = (self.uniform(), self.uniform());
-        libm::sqrt(-2.0 * libm::log(u)) * libm::cos(2.0 * std::f64::consts::PI * w)
-    }
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@ fn describe(r: &Rule) -> &'static str {
         Rule::bond | Rule::kw_bond => "`bond`",
         Rule::constraint | Rule::kw_constraint => "`constraint`",
         Rule::interaction | Rule::kw_interaction => "`interaction`",
+        Rule::thermostat | Rule::kw_thermostat => "`thermostat`",
         Rule::external => "a term",
         Rule::expect => "`@expect`",
         Rule::predict => "`@predict`",

@@ -35,7 +35,7 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
-    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `interaction`, `solver`, `box`, `lattice` or a name, found end of file"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `interaction`, `thermostat`, `solver`, `box`, `lattice` or a name, found end of file"));
 }
 
 #[test]

@@ -4,6 +4,8 @@
 
 mod action_descent;
 mod boris;
+mod langevin;
+mod nose_hoover;
 mod rattle;
 mod rk4;
 mod symplectic_euler;
@@ -13,8 +15,10 @@ mod yoshida;
 use crate::constraints::{Tolerance, Unconverged};
 use crate::forces::Singularity;
 use crate::graph::LagrangianGraph;
+use crate::scene::Scene;
 use crate::state::State;
 use crate::step::tick;
+use crate::thermostat::Thermostat;
 use lagra_checker::model::TermInstance;
 use serde::Serialize;
 use std::fmt;
@@ -281,6 +285,24 @@ impl Stepper {
             Integrator::Boris => Box::new(boris::Boris::new(g, s, at)?),
             Integrator::Rattle => Box::new(rattle::Rattle::new(g, at, tol)),
             Integrator::ActionDescent => Box::new(action_descent::ActionDescent::new(at, settings)),
+        };
+        Ok(Stepper { solver })
+    }
+
+    /// The stepper a scene asks for: its integrator, inside its thermostat if it has one (the
+    /// compiler allows a thermostat only with velocity Verlet).
+    pub fn for_scene(scene: &Scene, g: &LagrangianGraph, s: &State) -> Result<Self, Singularity> {
+        let at = || Evaluated::at(g, s);
+        let solver: Box<dyn Solver + Send> = match (&scene.thermostat, &scene.model.thermostat) {
+            (None, _) => return Stepper::new(scene.solver.integrator, scene.solver.settings, g, s),
+            (Some(Thermostat::NoseHoover { .. }), Some(chain)) => Box::new(nose_hoover::NoseHoover {
+                vv: velocity_verlet::VelocityVerlet { at: at()? },
+                chain: chain.clone(),
+            }),
+            (Some(Thermostat::Langevin { kt, gamma, seed }), _) => {
+                Box::new(langevin::Baoab { at: at()?, kt: *kt, gamma: *gamma, seed: *seed })
+            }
+            (Some(Thermostat::NoseHoover { .. }), None) => unreachable!("a Nosé–Hoover scene's model holds its chain"),
         };
         Ok(Stepper { solver })
     }

@@ -6,7 +6,7 @@ use crate::lang::compile;
 use crate::scene::Scene;
 
 fn start(scene: &Scene) -> State {
-    State { step: 0, t: 0.0, x: scene.x0.clone(), v: scene.v0.clone() }
+    scene.start()
 }
 
 /// Runs a scene's own solver to time `t` at step `dt` (with the scene's settings).

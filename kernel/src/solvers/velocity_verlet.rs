@@ -81,9 +81,15 @@ mod tests {
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
             constraints: vec![],
+            thermostat: None,
         };
-        let s =
-            State { step: 0, t: 0.0, x: vec![[0.0; 3], [1.7, 0.2, 0.0]], v: vec![[0.1, 0.3, 0.0], [-0.2, 0.0, 0.4]] };
+        let s = State {
+            step: 0,
+            t: 0.0,
+            x: vec![[0.0; 3], [1.7, 0.2, 0.0]],
+            v: vec![[0.1, 0.3, 0.0], [-0.2, 0.0, 0.4]],
+            chain: vec![],
+        };
         (LagrangianGraph::new(&model), s)
     }
 
