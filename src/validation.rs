@@ -109,10 +109,14 @@ pub fn compare(point: &Point, dir: &Path, shorter: Option<(u64, f64)>) -> Result
     })
 }
 
+/// A mean and its error, to two significant digits of the error.
 fn shown(e: &Estimate) -> String {
-    match e.stderr {
-        Some(s) => format!("{:.4} ± {:.4}", e.mean, s),
-        None => format!("{:.4}", e.mean),
+    match e.stderr.filter(|s| *s > 0.0) {
+        Some(s) => {
+            let digits = (1.0 - s.log10().floor()).clamp(0.0, 12.0) as usize;
+            format!("{:.digits$} ± {:.digits$}", e.mean, s)
+        }
+        None => format!("{:.6}", e.mean),
     }
 }
 
@@ -213,6 +217,14 @@ mod tests {
         std::fs::write(dir.join("nist_mc_nvt.csv"), "T,rho,U,U_err,P,P_err\n0.85,0.86\n").unwrap();
         assert!(table(&dir).unwrap_err().contains("expected 6 fields"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_mean_is_shown_to_its_error() {
+        let e = |mean, stderr| shown(&Estimate { mean, stderr: Some(stderr), samples: 1 });
+        assert_eq!(e(-6.03142, 0.0018), "-6.0314 ± 0.0018");
+        assert_eq!(e(0.000843, 0.0000012), "0.0008430 ± 0.0000012");
+        assert_eq!(e(1.25, 0.3), "1.25 ± 0.30");
     }
 
     #[test]

@@ -1,28 +1,12 @@
 //! End-to-end: the `lagra` binary on real scene files, through its exit codes and outputs.
 
+mod common;
+use common::{lagra, scene, stderr, stdout};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn lagra(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lagra")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::path::Path;
+use std::process::Output;
 
 /// Writes `text` as a scene file in `dir`.
-fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
 fn oscillator() -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/oscillator.lagra")).unwrap()
 }

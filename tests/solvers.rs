@@ -1,23 +1,9 @@
 //! End-to-end: every solver through the `lagra` binary — past its stability limit, in the
 //! report, on any number of threads, and the scenes that show it.
 
+mod common;
+use common::{lagra, scene, stdout};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn lagra(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lagra")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
 
 const INTEGRATORS: [&str; 7] =
     ["velocity_verlet", "symplectic_euler", "yoshida4", "rk4", "boris", "rattle", "action_descent"];

@@ -2,13 +2,11 @@
 //! `chromium`, which `setup.sh` installs): the 3D view is drawn, each plot has a point per frame
 //! or per checkpoint, a failing step is marked, and nothing is fetched from the network.
 
+mod common;
+use common::lagra;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn lagra(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lagra")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
-}
+use std::process::Command;
 
 /// What the page reports it drew (its `status` element), after its script ran in Chromium.
 fn drawn(page: &Path, profile: &Path) -> Value {

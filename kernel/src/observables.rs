@@ -295,3 +295,52 @@ mod tests {
         assert!((e.mean - d).abs() < 4.0 * e.stderr.unwrap() && (e.mean / d - 1.0).abs() < 0.03, "{e:?}");
     }
 }
+
+#[cfg(test)]
+mod virial {
+    use crate::graph::LagrangianGraph;
+    use crate::lang::compile;
+
+    /// The virial is the energy's response to stretching the box: with every position and the
+    /// box scaled by λ, dU/dλ at λ = 1 is −W (through the neighbour list, with periodic images,
+    /// for pairs and bonds alike).
+    #[test]
+    fn the_virial_is_minus_the_energys_response_to_stretching() {
+        let scene = compile(
+            "scene v { entity atom { mass: 1 }
+               lattice { type: atom, density: 0.8, cells: [4, 4, 4], temperature: 1.5, seed: 2 }
+               interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+               bond harmonic [0, 1] { k: 5, r0: 1.1 }
+               bond angle [2, 3, 4] { k: 3, theta0: 2.0 }
+               solver { dt: 0.005 } }",
+        )
+        .unwrap();
+        // melt a little, so that no pair sits on a lattice distance
+        let g = LagrangianGraph::new(&scene.model);
+        let mut s = scene.start();
+        let mut st = crate::solvers::Stepper::for_scene(&scene, &g, &s).unwrap();
+        st.advance_to(&g, &mut s, 0.005, 50).unwrap();
+        let w = g.virial(&s).unwrap().unwrap();
+        let energy = |l: f64| {
+            let mut model = scene.model.clone();
+            let cell = model.cell.as_mut().unwrap();
+            cell.size = cell.size.map(|c| c * l);
+            let g = LagrangianGraph::new(&model);
+            let mut t = s.clone();
+            t.x.iter_mut().flatten().for_each(|c| *c *= l);
+            let mut f = vec![[0.0; 3]; t.x.len()];
+            g.forces(&t, &mut f).unwrap()
+        };
+        let h = 1e-6;
+        let du = (energy(1.0 + h) - energy(1.0 - h)) / (2.0 * h);
+        assert!((du + w).abs() < 1e-5 * w.abs(), "dU/dλ = {du}, W = {w}");
+    }
+
+    #[test]
+    fn a_field_has_no_virial() {
+        let scene =
+            compile("scene f { entity { position: [0, 0, 0], mass: 1 } gravity { g: [0, -1, 0] } solver { dt: 0.1 } }")
+                .unwrap();
+        assert!(LagrangianGraph::new(&scene.model).virial(&scene.start()).is_none());
+    }
+}

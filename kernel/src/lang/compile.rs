@@ -9,6 +9,7 @@ use crate::constraints::{Constraints, Tolerance};
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Sampling, Scene, Solver};
 use crate::solvers::{Integrator, Settings};
+use crate::tail::Tail;
 use crate::thermostat::{self, Bath, Thermostat};
 use lagra_checker::claims::{Between, Claim, ClaimKind};
 use lagra_checker::model::{Body, Cell, Constraint, Model, TermInstance, UnitSystem};
@@ -41,7 +42,8 @@ struct SolverBlock {
     /// `equilibrate` (a time), `sample_every`, `tail_corrections`.
     equilibrate: Option<f64>,
     sample_every: Option<u64>,
-    tail_corrections: bool,
+    /// Where `tail_corrections: true` was asked for.
+    tail_corrections: Option<Span>,
     /// `tol`, `iterations`, `window`, each with where it was written.
     settings: Vec<(&'static str, f64, Span)>,
     dt: f64,
@@ -611,10 +613,10 @@ impl<'a> Compiler<'a> {
         };
         let sample_every = b.take("sample_every").map(|f| self.rd.count(&f, "solver")).transpose()?;
         let tail_corrections = match b.take("tail_corrections") {
-            None => false,
+            None => None,
             Some(f) => match word(&f, "solver")? {
-                ("true", _) => true,
-                ("false", _) => false,
+                ("true", at) => Some(at),
+                ("false", _) => None,
                 (w, at) => return err(at, format!("solver.tail_corrections is true or false, got `{w}`")),
             },
         };
@@ -741,11 +743,12 @@ impl<'a> Compiler<'a> {
                 Sampling {
                     equilibrate: block.equilibrate.unwrap_or(0.0),
                     every: block.sample_every.unwrap_or(10),
-                    tail_corrections: block.tail_corrections,
+                    tail_corrections: block.tail_corrections.is_some(),
                 }
             });
-        if block.tail_corrections && sampling.is_none() {
-            return err(block.at, "tail_corrections apply to the measured observables: give `equilibrate` too");
+        let tail_at = block.tail_corrections;
+        if let (Some(at), None) = (tail_at, sampling) {
+            return err(at, "tail_corrections apply to the measured observables: give `equilibrate` too");
         }
         let solver = self.settle(block)?;
         let constraints = self.constrain(&cell, &solver.settings)?;
@@ -781,6 +784,9 @@ impl<'a> Compiler<'a> {
                 Some(t)
             }
         };
+        if let Some(at) = tail_at {
+            Tail::of(&model).map_err(|e| Diagnostic::new(at, e))?;
+        }
         let bath = thermostat.as_ref().map(|t| Bath::of(t, &model));
         let predictions = self
             .predictions

@@ -217,3 +217,102 @@ fn rattle_keeps_a_chain_rigid() {
     }
     assert!(st.iterations().unwrap().most_iterations >= 1);
 }
+
+/// 5,324 LJ atoms (enough to split the pair list), under a scene's thermostat.
+fn thermostatted(bath: &str) -> Scene {
+    compile(&format!(
+        "scene m {{ entity atom {{ mass: 1.3 }}
+           lattice {{ type: atom, density: 0.8442, cells: [11, 11, 11], temperature: 1.4, seed: 5 }}
+           interaction lj_shifted {{ epsilon: 1, sigma: 1, cutoff: 2.5 }}
+           thermostat {bath}
+           solver {{ dt: 0.004 }} }}"
+    ))
+    .unwrap()
+}
+
+/// Both thermostats give the same bits on any number of threads (a Langevin bath draws each
+/// body's noise alone), and stepping to a step in one call is stepping one at a time.
+#[test]
+fn thermostats_give_the_same_bits_on_any_number_of_threads_and_however_stepped() {
+    for bath in ["nose_hoover { T: 1.0, tau: 0.1 }", "langevin { T: 1.0, gamma: 2, seed: 9 }"] {
+        let scene = thermostatted(bath);
+        let end = |threads: usize, at_once: bool| {
+            let g = LagrangianGraph::with_threads(&scene.model, threads).unwrap();
+            let mut s = start(&scene);
+            let mut st = Stepper::for_scene(&scene, &g, &s).unwrap();
+            if at_once {
+                st.advance_to(&g, &mut s, 0.004, 4).unwrap();
+            } else {
+                for _ in 0..4 {
+                    st.step(&g, &mut s, 0.004).unwrap();
+                }
+            }
+            (s, st.potential().to_bits(), st.forces().to_vec())
+        };
+        let one = end(1, true);
+        assert!(one.0.chain.iter().any(|l| l[1] != 0.0) || bath.starts_with("langevin"), "{bath}: the chain moved");
+        assert_eq!(one, end(3, true), "{bath}");
+        assert_eq!(one, end(1, false), "{bath}");
+    }
+}
+
+/// A Langevin bath's O step is exact for free bodies: from rest, the velocities become
+/// Gaussian at the bath's kT/m, on every axis; the same seed gives the same bits, another seed
+/// other ones.
+#[test]
+fn a_langevin_bath_brings_free_bodies_to_its_temperature() {
+    let scene = |seed: u64| {
+        compile(&format!(
+            "scene g {{ entity atom {{ mass: 2 }}
+               lattice {{ type: atom, density: 0.01, cells: [10, 10, 10] }}
+               thermostat langevin {{ T: 0.7, gamma: 5, seed: {seed} }}
+               solver {{ dt: 0.01, steps: 400 }} }}"
+        ))
+        .unwrap()
+    };
+    let end = |seed: u64| {
+        let s = scene(seed);
+        let g = LagrangianGraph::new(&s.model);
+        let mut state = start(&s);
+        Stepper::for_scene(&s, &g, &state).unwrap().advance_to(&g, &mut state, 0.01, 400).unwrap();
+        state
+    };
+    let s = end(4);
+    let n = 3.0 * s.v.len() as f64;
+    let t = 2.0 * crate::state::kinetic(&s, &vec![2.0; s.v.len()]) / n;
+    // 3000 components: the kinetic temperature's relative spread is √(2/3000) ≈ 2.6%
+    assert!((t / 0.7 - 1.0).abs() < 0.08, "kinetic temperature {t}");
+    assert_eq!(s, end(4));
+    assert_ne!(s.v, end(5).v);
+}
+
+/// The Nosé–Hoover chain holds an LJ liquid started hot near the bath's temperature, and H′
+/// stays put (the checker certifies it in the shipped scene `lj_nvt`).
+#[test]
+fn a_nose_hoover_chain_holds_a_liquid_at_its_temperature() {
+    let scene = compile(
+        "scene m { entity atom { mass: 1 }
+           lattice { type: atom, density: 0.8442, cells: [4, 4, 4], temperature: 2.0, seed: 5 }
+           interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+           thermostat nose_hoover { T: 0.9, tau: 0.2 }
+           solver { dt: 0.004 } }",
+    )
+    .unwrap();
+    let g = LagrangianGraph::new(&scene.model);
+    let mut s = start(&scene);
+    let chain = scene.model.thermostat.clone().unwrap();
+    let mut st = Stepper::for_scene(&scene, &g, &s).unwrap();
+    let h = |s: &State, potential: f64| crate::state::kinetic(s, &g.masses) + potential + chain.energy(&s.chain, &0.0);
+    let h0 = h(&s, st.potential());
+    let (mut sum, mut n, mut worst) = (0.0, 0.0, 0.0f64);
+    for until in (10..=5000).step_by(10) {
+        st.advance_to(&g, &mut s, 0.004, until).unwrap();
+        worst = worst.max(((h(&s, st.potential()) - h0) / h0).abs());
+        if until > 2500 {
+            sum += 2.0 * crate::state::kinetic(&s, &g.masses) / chain.dof;
+            n += 1.0;
+        }
+    }
+    assert!((sum / n / 0.9 - 1.0).abs() < 0.03, "⟨T⟩ = {}", sum / n);
+    assert!(worst < 1e-3, "H′ moved by {worst:e}");
+}
