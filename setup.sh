@@ -22,6 +22,15 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import mcp" >/dev/null 2>
   python3 -m venv .venv
   .venv/bin/python -m pip install --quiet --disable-pip-version-check "mcp>=2" >&2
 fi
+# What the Python package's tests read with (ASE reads the trajectory formats back) and the
+# example plots with; then the package itself, built from python/ (maturin, pyo3) into .venv.
+# It builds in the workspace's target directory, so `cargo test` reuses what it compiled.
+if ! .venv/bin/python -c "import pytest, ase, numpy, matplotlib" >/dev/null 2>&1; then
+  echo "setup: installing pytest, ase, numpy and matplotlib into .venv" >&2
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check pytest ase numpy matplotlib >&2
+fi
+echo "setup: building and installing the Python package (pip install ./python) into .venv" >&2
+.venv/bin/python -m pip install --quiet --disable-pip-version-check ./python >&2
 # Chromium, headless, loads the viewer's pages in tests/view.rs.
 if ! command -v chromium >/dev/null 2>&1; then
   echo "setup: installing chromium (headless, for the viewer's tests)" >&2

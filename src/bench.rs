@@ -523,6 +523,7 @@ fn overhead(steps: u64, repeats: u32, json: bool) -> Result<String, String> {
             threads: 1,
             progress: None,
             stop: None,
+            watch: None,
         };
         let rep = lagra_kernel::run::run(&scene, opts)?;
         engine = engine.min(rep.wall_s);

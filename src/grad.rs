@@ -49,9 +49,12 @@ pub struct GradArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
-    /// A progress line on stderr.
+    /// A progress bar on stderr: `auto` on a terminal when the work takes over two seconds.
     #[arg(long, value_name = "WHEN", default_value = "auto")]
     progress: When,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -82,6 +85,13 @@ pub struct FitArgs {
     threads: usize,
     #[arg(long)]
     json: bool,
+    /// A progress bar on stderr (the objective's evaluations): `auto` on a terminal when the fit
+    /// takes over two seconds.
+    #[arg(long, value_name = "WHEN", default_value = "auto")]
+    progress: When,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 fn bad(msg: impl std::fmt::Display) -> ExitCode {
@@ -239,7 +249,7 @@ pub fn grad(a: GradArgs) -> ExitCode {
     }
     let passes =
         3 * scene.solver.steps * if a.method == GradMethod::Reverse { 1 } else { 1 + a.wrt.split(',').count() as u64 };
-    let mut progress = Progress::new(a.progress, passes);
+    let mut progress = Progress::new(a.progress.unless(a.quiet), passes);
     let mut count = 0u64;
     let mut tell = |what: &str, _done: u64, _of: u64| {
         count += 1;
@@ -289,9 +299,19 @@ struct Fit<'a> {
     objective: &'a Objective,
     wrt: &'a [Named],
     threads: usize,
+    /// The evaluations so far, shown on the progress bar.
+    evaluations: std::cell::Cell<u64>,
+    progress: &'a std::cell::RefCell<Option<Progress>>,
 }
 
 impl Fit<'_> {
+    fn count(&self) {
+        self.evaluations.set(self.evaluations.get() + 1);
+        if let Some(p) = self.progress.borrow_mut().as_mut() {
+            p.at_in("evaluations", self.evaluations.get());
+        }
+    }
+
     fn at(&self, p: &[f64]) -> Result<Scene, argmin::core::Error> {
         let mut s = self.scene.clone();
         for (n, &v) in self.wrt.iter().zip(p) {
@@ -305,6 +325,7 @@ impl CostFunction for Fit<'_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+        self.count();
         objective_value(&self.at(p)?, self.objective, self.threads).map_err(argmin::core::Error::msg)
     }
 }
@@ -313,6 +334,7 @@ impl ArgminGradient for Fit<'_> {
     type Param = Vec<f64>;
     type Gradient = Vec<f64>;
     fn gradient(&self, p: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
+        self.count();
         let s = self.at(p)?;
         let r = Request { scene: &s, objective: self.objective, wrt: self.wrt, threads: self.threads, progress: None };
         Ok(gradient(r, Method::Reverse).map_err(argmin::core::Error::msg)?.gradient.into_iter().map(|g| g.1).collect())
@@ -347,7 +369,16 @@ pub fn fit(a: FitArgs) -> ExitCode {
     };
     let start = Instant::now();
     let initial: Vec<f64> = wrt.iter().map(|n| n.param.get(&scene)).collect();
-    let problem = Fit { scene: &scene, objective: &objective, wrt: &wrt, threads: a.threads };
+    // L-BFGS with a Moré–Thuente line search: about three evaluations an iteration
+    let progress = std::cell::RefCell::new(Progress::new(a.progress.unless(a.quiet), 3 * a.iterations));
+    let problem = Fit {
+        scene: &scene,
+        objective: &objective,
+        wrt: &wrt,
+        threads: a.threads,
+        evaluations: Default::default(),
+        progress: &progress,
+    };
     let initial_loss = match problem.cost(&initial) {
         Ok(l) => l,
         Err(e) => return bad(e),
@@ -357,6 +388,7 @@ pub fn fit(a: FitArgs) -> ExitCode {
         .and_then(|s| s.with_tolerance_grad(1e-12))
         .expect("valid tolerances");
     let result = Executor::new(problem, solver).configure(|s| s.param(initial.clone()).max_iters(a.iterations)).run();
+    progress.borrow().iter().for_each(Progress::done);
     let res = match result {
         Ok(r) => r,
         Err(e) => {

@@ -1,21 +1,7 @@
 //! `lagra`: run a scene and certify its claims.
 
-mod bench;
-mod check;
-mod grad;
-mod lean;
-mod list;
-mod mcp;
-mod noether;
-mod progress;
-mod report;
-mod run;
-mod summation;
-mod terms;
-mod validation;
-mod view;
-
 use clap::{Parser, Subcommand};
+use lagra::{bench, check, grad, lean, list, mcp, noether, run, terms, view};
 use std::process::ExitCode;
 
 /// Exit codes: 0 every claim PASSed, 1 a claim FAILed or was UNDECIDED (or a prediction

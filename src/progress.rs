@@ -1,7 +1,9 @@
-//! The progress line of a long run on stderr: `auto` shows it on a terminal once a run has
-//! taken a second, `always` everywhere (a line per report), `never` not at all; it changes no
-//! result.
+//! The progress of a long run on stderr: `auto` shows a bar (indicatif) on a terminal once a
+//! run has taken two seconds — steps done, steps per second, time left, and that no claim has
+//! been breached (the run would have halted) — `always` a line per report everywhere, `never`
+//! (or `--quiet`) nothing; it changes no result.
 
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
@@ -12,20 +14,35 @@ pub enum When {
     Never,
 }
 
-/// The progress line: on a terminal one line rewritten in place (from a second into the run,
-/// twice a second), elsewhere (`always`) a line per report.
+impl When {
+    /// `--quiet` wins over `--progress`.
+    pub fn unless(self, quiet: bool) -> When {
+        if quiet {
+            When::Never
+        } else {
+            self
+        }
+    }
+}
+
+/// On a terminal, a bar from two seconds into the run; elsewhere (`always`) a line per report,
+/// twice a second at most.
 pub struct Progress {
     planned: u64,
     terminal: bool,
     start: Instant,
     shown: Option<Instant>,
+    bar: Option<ProgressBar>,
 }
+
+/// How long a run goes before a bar appears: a short run stays quiet.
+const QUIET_FOR: f64 = 2.0;
 
 impl Progress {
     pub fn new(when: When, planned: u64) -> Option<Progress> {
         let terminal = std::io::stderr().is_terminal();
         let on = when == When::Always || (when == When::Auto && terminal);
-        on.then(|| Progress { planned, terminal, start: Instant::now(), shown: None })
+        on.then(|| Progress { planned, terminal, start: Instant::now(), shown: None, bar: None })
     }
 
     pub fn at(&mut self, step: u64) {
@@ -34,9 +51,31 @@ impl Progress {
 
     /// The same, naming what is counted (`forward`, `backward`, ...).
     pub fn at_in(&mut self, what: &str, step: u64) {
-        let (now, elapsed) = (Instant::now(), self.start.elapsed().as_secs_f64());
-        let due = self.shown.is_none_or(|t| now - t >= Duration::from_millis(500));
-        if !due || (self.terminal && elapsed < 1.0) {
+        let elapsed = self.start.elapsed().as_secs_f64();
+        if self.terminal {
+            if elapsed < QUIET_FOR {
+                return;
+            }
+            let planned = self.planned;
+            let bar = self.bar.get_or_insert_with(|| {
+                let bar = ProgressBar::with_draw_target(Some(planned), ProgressDrawTarget::stderr());
+                let style = ProgressStyle::with_template(
+                    "{prefix} {bar:30} {pos}/{len} ({percent}%), {rate}/s, {eta} left, {msg}",
+                )
+                .expect("a fixed template")
+                .with_key("rate", |s: &ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{:.0}", s.per_sec());
+                });
+                bar.set_style(style);
+                bar.set_message("no claim breached so far");
+                bar
+            });
+            bar.set_prefix(what.to_string());
+            bar.set_position(step);
+            return;
+        }
+        let now = Instant::now();
+        if self.shown.is_some_and(|t| now - t < Duration::from_millis(500)) {
             return;
         }
         let mut line = format!(
@@ -48,18 +87,14 @@ impl Progress {
         if elapsed >= 0.5 {
             line += &format!(", about {:.0} s left", elapsed * (self.planned - step) as f64 / step.max(1) as f64);
         }
-        if self.terminal {
-            eprint!("\r{line}\x1b[K");
-        } else {
-            eprintln!("lagra: {line}");
-        }
+        eprintln!("lagra: {line}");
         self.shown = Some(now);
     }
 
-    /// Clears a terminal's line before the report.
+    /// Clears the bar before the report.
     pub fn done(&self) {
-        if self.terminal && self.shown.is_some() {
-            eprint!("\r\x1b[K");
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
         }
     }
 }

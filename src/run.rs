@@ -11,6 +11,7 @@ use lagra_kernel::lang::compile;
 use lagra_kernel::run::{run, Options, Report};
 use lagra_kernel::scene::Scene;
 use lagra_kernel::solvers::Integrator;
+use lagra_kernel::trace::{Format, Frames, Writer};
 use lagra_noether::Analysis;
 use sha2::{Digest, Sha256};
 use std::fs::File;
@@ -25,8 +26,10 @@ pub struct Args {
     /// Print the report as one JSON document instead of text.
     #[arg(long)]
     json: bool,
-    /// Write one JSON line per frame (step, t, energy witness, positions, velocities).
-    #[arg(long, value_name = "FILE.jsonl")]
+    /// Write every frame (steps_per_frame): by the extension, `.jsonl` (step, t, energy
+    /// witness, positions, velocities a line; what `lagra view` reads), `.xyz` (extended XYZ,
+    /// for ASE and OVITO) or `.lammpstrj` (LAMMPS text dump, for OVITO, VMD, MDAnalysis).
+    #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
     /// Write the certificate: scene digest, canonical graph, claims, per-checkpoint
     /// enclosures, verdicts (re-check it with `lagra check` or `lagra-check`).
@@ -56,10 +59,14 @@ pub struct Args {
     /// Print how each term group visits its bodies (every pair, cell list, Verlet list, chunks).
     #[arg(long)]
     explain: bool,
-    /// A progress line on stderr (step, elapsed, time left): `auto` shows it when stderr is a
-    /// terminal and the run takes over a second.
+    /// A progress bar on stderr (steps, steps per second, time left, claims): `auto` shows it
+    /// when stderr is a terminal and the run takes over two seconds; `always` prints a line per
+    /// report instead, anywhere.
     #[arg(long, value_name = "WHEN", default_value = "auto")]
     progress: When,
+    /// No progress bar (the same as --progress never).
+    #[arg(long)]
+    quiet: bool,
     /// Refuse (exit 2) a scene that declares a claim its symmetries cannot support (momentum
     /// along a floor's normal); without it that is a warning.
     #[arg(long)]
@@ -91,6 +98,7 @@ fn bad(msg: impl std::fmt::Display) -> ExitCode {
 
 /// A scene as `lagra run` runs it: compiled from its source, its `--set` and `--dt` applied,
 /// `@expect noether` expanded; with the Noether analysis and the warnings it gave.
+#[derive(Clone)]
 pub struct Prepared {
     pub scene: Scene,
     pub analysis: Analysis,
@@ -154,16 +162,21 @@ pub fn main(a: Args) -> ExitCode {
     if a.threads == 0 {
         return bad("--threads must be at least 1");
     }
-    // the trace goes to its file, or, for a page and no file, to memory
-    let mut kept: Vec<u8> = vec![];
-    let mut trace: Option<Box<dyn Write + '_>> = match (&a.trace, &a.view) {
-        (Some(p), _) => match File::create(p) {
-            Ok(f) => Some(Box::new(BufWriter::new(f))),
+    // the trace goes to its file, and, for a page, to memory as well
+    let format = match a.trace.as_deref().map(Format::of).transpose() {
+        Ok(f) => f,
+        Err(e) => return bad(e),
+    };
+    let mut file = match a.trace.as_ref().zip(format) {
+        Some((p, format)) => match File::create(p) {
+            Ok(f) => Some(Writer { out: BufWriter::new(f), format, cell: scene.model.cell }),
             Err(e) => return bad(format!("cannot create the trace file: {e}")),
         },
-        (None, Some(_)) => Some(Box::new(&mut kept)),
-        (None, None) => None,
+        None => None,
     };
+    let mut kept = Writer { out: Vec::<u8>::new(), format: Format::Jsonl, cell: scene.model.cell };
+    let mut both = Tee(file.as_mut(), a.view.as_ref().map(|_| &mut kept));
+    let tracing = both.0.is_some() || both.1.is_some();
     let mut states = match a
         .states
         .as_ref()
@@ -174,23 +187,23 @@ pub fn main(a: Args) -> ExitCode {
         Err(e) => return bad(format!("cannot create the state file: {e}")),
     };
     let mut record = recorder(|s| states.as_mut().map_or(Ok(()), |w| w.push(s)));
-    let mut progress = Progress::new(a.progress, a.steps.unwrap_or(scene.solver.steps));
+    let mut progress = Progress::new(a.progress.unless(a.quiet), a.steps.unwrap_or(scene.solver.steps));
     let shown = progress.is_some();
     let mut tick = |step: u64| progress.as_mut().into_iter().for_each(|p| p.at(step));
     let result = run(
         scene,
         Options {
             steps: a.steps,
-            trace: trace.as_mut().map(|w| w.as_mut() as &mut dyn Write),
+            trace: tracing.then_some(&mut both as &mut dyn Frames),
             record: a.states.is_some().then_some(&mut record),
             threads: a.threads,
             progress: shown.then_some(&mut tick),
             stop: None,
+            watch: None,
         },
     );
     progress.iter().for_each(Progress::done);
-    let flushed = trace.take().map(|mut t| t.flush()).transpose();
-    drop(trace);
+    let flushed = file.as_mut().map(|w| w.out.flush()).transpose();
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,
         (Err(e), _) => return bad(e),
@@ -227,10 +240,7 @@ pub fn main(a: Args) -> ExitCode {
             }
         }
         if let Some(out) = &a.view {
-            let text = match &a.trace {
-                Some(p) => std::fs::read_to_string(p).map_err(|e| format!("cannot read the trace back: {e}")),
-                None => String::from_utf8(std::mem::take(&mut kept)).map_err(|e| e.to_string()),
-            };
+            let text = String::from_utf8(std::mem::take(&mut kept.out)).map_err(|e| e.to_string());
             let page = text.and_then(|t| crate::view::page(&t, "the trace", Some(scene), Some(&cert)));
             if let Err(e) =
                 page.and_then(|p| std::fs::write(out, p).map_err(|e| format!("cannot write {}: {e}", out.display())))
@@ -248,6 +258,21 @@ pub fn main(a: Args) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
+    }
+}
+
+/// A trace written to a file and kept in memory for a page, either or both.
+struct Tee<'a, A: Frames, B: Frames>(Option<&'a mut A>, Option<&'a mut B>);
+
+impl<A: Frames, B: Frames> Frames for Tee<'_, A, B> {
+    fn frame(&mut self, s: &lagra_kernel::state::State, energy: f64) -> std::io::Result<()> {
+        if let Some(a) = self.0.as_mut() {
+            a.frame(s, energy)?;
+        }
+        if let Some(b) = self.1.as_mut() {
+            b.frame(s, energy)?;
+        }
+        Ok(())
     }
 }
 

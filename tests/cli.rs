@@ -4,7 +4,7 @@ mod common;
 use common::{lagra, scene, stderr, stdout};
 use serde_json::Value;
 use std::path::Path;
-use std::process::Output;
+use std::process::{Command, Output};
 
 /// Writes `text` as a scene file in `dir`.
 fn oscillator() -> String {
@@ -527,4 +527,29 @@ fn a_failure_the_symmetries_forbid_is_blamed_on_the_integrator() {
     let out = stdout(&o);
     assert_eq!(o.status.code(), Some(1), "{out}");
     assert!(out.contains("noether     energy_conservation: the scene's symmetries conserve it (Noether), so its failure points at the integrator or a force"), "{out}");
+}
+
+/// On a terminal (a pseudo-terminal from `script`), a run of over two seconds shows a progress
+/// bar with the claims' state; `--quiet` shows none, and a pipe never gets one.
+#[test]
+fn a_long_run_on_a_terminal_shows_a_progress_bar() {
+    if Command::new("script").arg("--version").output().is_err() {
+        eprintln!("no `script` here to make a terminal: skipped");
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_lagra");
+    let on_terminal = |extra: &str| {
+        let cmd = format!("{bin} run scenes/lj_liquid.lagra --steps 40000 {extra}");
+        let o = Command::new("script")
+            .args(["-qec", &cmd, "/dev/null"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let shown = on_terminal("");
+    assert!(shown.contains("/40000 (") && shown.contains("no claim breached so far"), "{shown}");
+    assert!(!on_terminal("--quiet").contains("no claim breached"));
+    let piped = lagra(&["run", "scenes/lj_liquid.lagra", "--steps", "40000"]);
+    assert!(!stderr(&piped).contains("breached"), "{}", stderr(&piped));
 }

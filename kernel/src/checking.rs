@@ -183,10 +183,12 @@ mod tests {
     /// A run with a trace cannot overlap (the trace would show states past a breach): the
     /// reference, inline.
     fn both(scene: &crate::scene::Scene) -> (Report, Report) {
-        let overlapped =
-            run(scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
-                .unwrap();
-        let mut sink = std::io::sink();
+        let overlapped = run(
+            scene,
+            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
+        )
+        .unwrap();
+        let mut sink = crate::trace::Recorded::default();
         let inline = run(
             scene,
             Options { steps: None, trace: Some(&mut sink), record: None, threads: 1, progress: None, stop: None },
@@ -279,9 +281,11 @@ mod tests {
                    solver {{ dt: {dt}, steps: 400 }} }}"
             ))
             .unwrap();
-            let straight =
-                run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
-                    .unwrap();
+            let straight = run(
+                &scene,
+                Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
+            )
+            .unwrap();
             let mut shown = 0;
             let mut each = |_: &lagra_checker::model::Snapshot| -> std::io::Result<()> {
                 shown += 1;
@@ -316,9 +320,11 @@ mod tests {
                bond harmonic [0, 1] { k: 3, r0: 1 } solver { dt: 0.01, steps: 1200000 } }",
         )
         .unwrap();
-        let plain =
-            run(&scene, Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None })
-                .unwrap();
+        let plain = run(
+            &scene,
+            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
+        )
+        .unwrap();
         let (watched, reached) = with_progress(&scene);
         same(&plain, &watched);
         assert_eq!(reached, [1 << 19, 1 << 20, 1_200_000]);

@@ -21,4 +21,5 @@ pub mod step;
 pub mod sum;
 pub mod tail;
 pub mod thermostat;
+pub mod trace;
 pub mod traverse;

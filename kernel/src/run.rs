@@ -9,11 +9,11 @@ use crate::predict::{Meter, Prediction};
 use crate::scene::Scene;
 use crate::solvers::{Iterations, Stepper};
 use crate::state::{kinetic, State};
+use crate::trace::Frames;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
 use lagra_checker::terms::Kind;
 use serde::Serialize;
-use std::io::Write;
 use std::time::Instant;
 
 /// Why a run stopped before its last step.
@@ -66,8 +66,8 @@ pub type Recorder<'a> = &'a mut dyn FnMut(&Snapshot) -> std::io::Result<()>;
 pub struct Options<'a> {
     /// Overrides the scene's run length.
     pub steps: Option<u64>,
-    /// One JSON line per frame.
-    pub trace: Option<&'a mut dyn Write>,
+    /// Every frame (`steps_per_frame`), in a format (`trace::Writer`) or in memory.
+    pub trace: Option<&'a mut dyn Frames>,
     /// Called with every state the checker is shown (step 0 included), to keep them.
     pub record: Option<Recorder<'a>>,
     /// Threads for the forces (the results are the same bits for any count).
@@ -78,15 +78,14 @@ pub struct Options<'a> {
     /// Read as often as `progress` is called: once set, the run stops there (`Stop::Cancelled`),
     /// with the claims judged up to the state reached.
     pub stop: Option<&'a std::sync::atomic::AtomicBool>,
+    /// Shown the state every so many steps (a notebook's live plot); the run is the same bits.
+    pub watch: Option<Watch<'a>>,
 }
 
-#[derive(Serialize)]
-struct TraceLine<'a> {
-    step: u64,
-    t: f64,
-    energy: f64,
-    x: &'a [[f64; 3]],
-    v: &'a [[f64; 3]],
+/// A look at the state every `every` steps.
+pub struct Watch<'a> {
+    pub every: u64,
+    pub see: &'a mut dyn FnMut(&State),
 }
 
 /// Runs a scene. Errors are setup errors (a model the checker rejects, trace I/O).
@@ -110,9 +109,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             // H, or with a thermostat chain the H′ the checker certifies
             let chain = scene.model.thermostat.as_ref().map_or(0.0, |c| c.energy(&s.chain, &0.0));
             let energy = kinetic(s, &graph.masses) + potential + chain;
-            let line = TraceLine { step: s.step, t: s.t, energy, x: &s.x, v: &s.v };
-            serde_json::to_writer(&mut *w, &line).map_err(|e| e.to_string())?;
-            writeln!(w).map_err(|e| format!("writing the trace: {e}"))?;
+            w.frame(s, energy).map_err(|e| format!("writing the trace: {e}"))?;
         }
         Ok(())
     };
@@ -123,6 +120,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // checker its checkpoints: the solver steps straight to the next of them
     let every_step = record.is_some() || !meters.is_empty();
     let mut progress = opts.progress.take();
+    let mut watch = opts.watch.take();
     let cancel = opts.stop;
     let watched_often = progress.is_some() || cancel.is_some();
     let stride = if watched_often { ((1u64 << 20) / scene.x0.len().max(1) as u64).max(1) } else { u64::MAX };
@@ -161,11 +159,13 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
                 while stop.is_none() && state.step < steps {
                     let next_frame = if tracing { next(frame, state.step) } else { u64::MAX };
+                    let next_look = watch.as_ref().map_or(u64::MAX, |w| next(w.every.max(1), state.step));
                     let until = if every_step {
                         state.step + 1
                     } else {
                         let sampled = observer.as_ref().map_or(u64::MAX, |o| o.next_due(state.step));
-                        checking.next_due(state.step).min(next_frame).min(next(stride, state.step)).min(sampled)
+                        let due = checking.next_due(state.step).min(next_frame).min(next_look);
+                        due.min(next(stride, state.step)).min(sampled)
                     };
                     if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
                         stop = Some(Stop::Solver { step: state.step + 1, message: e.to_string() });
@@ -181,6 +181,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     }
                     if tracing && (state.step.is_multiple_of(frame) || state.step == steps) {
                         trace(&state, solver.potential())?;
+                    }
+                    if let Some(w) = watch.as_mut().filter(|w| state.step.is_multiple_of(w.every.max(1))) {
+                        (w.see)(&state);
                     }
                     if let Some(p) = progress.as_mut() {
                         p(state.step);

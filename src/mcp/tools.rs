@@ -205,7 +205,15 @@ fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &Atom
             last = Some(std::time::Instant::now());
         }
     };
-    let opts = Options { steps, trace: None, record: None, threads, progress: Some(&mut tick), stop: Some(cancel) };
+    let opts = Options {
+        steps,
+        trace: None,
+        record: None,
+        threads,
+        progress: Some(&mut tick),
+        stop: Some(cancel),
+        watch: None,
+    };
     let rep = lagra_kernel::run::run(scene, opts)?;
     let summary: report::Summary = run::summarize(&path, &prepared, &rep, threads, false);
     let doc = serde_json::to_value(&summary).map_err(|e| e.to_string())?;

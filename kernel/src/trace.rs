@@ -1,0 +1,218 @@
+//! Trajectories in the formats other tools read: JSON lines (Lagra's own: `lagra view` reads
+//! it), extended XYZ (ASE, OVITO) and the LAMMPS text dump (OVITO, VMD, MDAnalysis). Numbers are
+//! written in the shortest form that reads back to the same binary64, so a reader gets the
+//! exact state.
+
+use crate::state::State;
+use lagra_checker::model::Cell;
+use serde::Serialize;
+use std::io::{self, Write};
+use std::path::Path;
+
+/// What a run hands each frame to.
+pub trait Frames {
+    fn frame(&mut self, s: &State, energy: f64) -> io::Result<()>;
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Format {
+    Jsonl,
+    Xyz,
+    LammpsDump,
+}
+
+impl Format {
+    /// By the file's extension: `.jsonl`, `.xyz`, `.lammpstrj`.
+    pub fn of(path: &Path) -> Result<Format, String> {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("jsonl") => Ok(Format::Jsonl),
+            Some("xyz") => Ok(Format::Xyz),
+            Some("lammpstrj") => Ok(Format::LammpsDump),
+            _ => Err(format!(
+                "{}: a trace is .jsonl (Lagra's own), .xyz (extended XYZ) or .lammpstrj (LAMMPS text dump)",
+                path.display()
+            )),
+        }
+    }
+}
+
+/// Frames written to `out` in `format`; `cell` is the scene's box, if it has one.
+pub struct Writer<W: Write> {
+    pub out: W,
+    pub format: Format,
+    pub cell: Option<Cell>,
+}
+
+#[derive(Serialize)]
+struct Line<'a> {
+    step: u64,
+    t: f64,
+    energy: f64,
+    x: &'a [[f64; 3]],
+    v: &'a [[f64; 3]],
+}
+
+impl<W: Write> Frames for Writer<W> {
+    fn frame(&mut self, s: &State, energy: f64) -> io::Result<()> {
+        let w = &mut self.out;
+        match self.format {
+            Format::Jsonl => {
+                serde_json::to_writer(&mut *w, &Line { step: s.step, t: s.t, energy, x: &s.x, v: &s.v })?;
+                writeln!(w)
+            }
+            Format::Xyz => {
+                writeln!(w, "{}", s.x.len())?;
+                let lattice = match &self.cell {
+                    Some(c) => {
+                        let [a, b, cc] = c.size;
+                        let pbc = c.periodic.map(|p| if p { "T" } else { "F" }).join(" ");
+                        format!("Lattice=\"{a} 0 0 0 {b} 0 0 0 {cc}\" pbc=\"{pbc}\" ")
+                    }
+                    None => String::new(),
+                };
+                writeln!(
+                    w,
+                    "{lattice}Properties=species:S:1:pos:R:3:velo:R:3 step={} time={} energy={energy}",
+                    s.step, s.t
+                )?;
+                for (x, v) in s.x.iter().zip(&s.v) {
+                    writeln!(w, "X {} {} {} {} {} {}", x[0], x[1], x[2], v[0], v[1], v[2])?;
+                }
+                Ok(())
+            }
+            Format::LammpsDump => {
+                writeln!(w, "ITEM: TIMESTEP\n{}\nITEM: NUMBER OF ATOMS\n{}", s.step, s.x.len())?;
+                // a periodic axis is the box; another one is what the bodies span
+                let bounds: [(f64, f64, &str); 3] = std::array::from_fn(|a| match &self.cell {
+                    Some(c) if c.periodic[a] => (0.0, c.size[a], "pp"),
+                    _ => {
+                        let lo = s.x.iter().map(|x| x[a]).fold(f64::INFINITY, f64::min);
+                        let hi = s.x.iter().map(|x| x[a]).fold(f64::NEG_INFINITY, f64::max);
+                        // a flat axis (a planar orbit) still gets a box a reader accepts
+                        (lo, if hi > lo { hi } else { lo + 1.0 }, "ff")
+                    }
+                });
+                writeln!(w, "ITEM: BOX BOUNDS {} {} {}", bounds[0].2, bounds[1].2, bounds[2].2)?;
+                for (lo, hi, _) in bounds {
+                    writeln!(w, "{lo} {hi}")?;
+                }
+                // unwrapped positions: Lagra never wraps a body into the box
+                writeln!(w, "ITEM: ATOMS id type xu yu zu vx vy vz")?;
+                for (i, (x, v)) in s.x.iter().zip(&s.v).enumerate() {
+                    writeln!(w, "{} 1 {} {} {} {} {} {}", i + 1, x[0], x[1], x[2], v[0], v[1], v[2])?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Frames kept in memory, flat: frame k's body i's coordinate c at `x[3·(k·n + i) + c]`.
+#[derive(Clone, Debug, Default)]
+pub struct Recorded {
+    pub bodies: usize,
+    pub steps: Vec<u64>,
+    pub times: Vec<f64>,
+    pub energies: Vec<f64>,
+    pub x: Vec<f64>,
+    pub v: Vec<f64>,
+}
+
+impl Frames for Recorded {
+    fn frame(&mut self, s: &State, energy: f64) -> io::Result<()> {
+        self.bodies = s.x.len();
+        self.steps.push(s.step);
+        self.times.push(s.t);
+        self.energies.push(energy);
+        self.x.extend(s.x.iter().flatten());
+        self.v.extend(s.v.iter().flatten());
+        Ok(())
+    }
+}
+
+impl Recorded {
+    /// Writes every frame again, to `to`.
+    pub fn replay(&self, to: &mut dyn Frames) -> io::Result<()> {
+        let n = self.bodies;
+        let vecs =
+            |a: &[f64], k: usize| a[3 * k * n..3 * (k + 1) * n].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        for k in 0..self.steps.len() {
+            let s = State {
+                step: self.steps[k],
+                t: self.times[k],
+                x: vecs(&self.x, k),
+                v: vecs(&self.v, k),
+                chain: vec![],
+            };
+            to.frame(&s, self.energies[k])?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state() -> State {
+        State {
+            step: 7,
+            t: 0.035,
+            x: vec![[0.1, -2.5, 1e-300], [3.0, 4.0, 5.0]],
+            v: vec![[1.0, 0.0, -1.0], [0.5, 0.25, 0.125]],
+            chain: vec![],
+        }
+    }
+
+    fn written(format: Format, cell: Option<Cell>) -> String {
+        let mut w = Writer { out: vec![], format, cell };
+        w.frame(&state(), -1.5).unwrap();
+        String::from_utf8(w.out).unwrap()
+    }
+
+    #[test]
+    fn extended_xyz_has_the_cell_the_step_and_exact_numbers() {
+        let cell = Cell { size: [10.0, 11.0, 12.5], periodic: [true, true, false] };
+        assert_eq!(
+            written(Format::Xyz, Some(cell)),
+            "2\nLattice=\"10 0 0 0 11 0 0 0 12.5\" pbc=\"T T F\" Properties=species:S:1:pos:R:3:velo:R:3 step=7 time=0.035 energy=-1.5\nX 0.1 -2.5 1e-300 1 0 -1\nX 3 4 5 0.5 0.25 0.125\n"
+        );
+        assert!(written(Format::Xyz, None).lines().nth(1).unwrap().starts_with("Properties="));
+    }
+
+    #[test]
+    fn a_lammps_dump_has_the_box_or_the_span() {
+        let cell = Cell { size: [10.0, 11.0, 12.5], periodic: [true, true, false] };
+        let text = written(Format::LammpsDump, Some(cell));
+        assert!(
+            text.starts_with(
+                "ITEM: TIMESTEP\n7\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS pp pp ff\n0 10\n0 11\n1e-300 5\n"
+            ),
+            "{text}"
+        );
+        assert!(text.ends_with(
+            "ITEM: ATOMS id type xu yu zu vx vy vz\n1 1 0.1 -2.5 1e-300 1 0 -1\n2 1 3 4 5 0.5 0.25 0.125\n"
+        ));
+    }
+
+    #[test]
+    fn formats_come_from_the_extension() {
+        assert_eq!(Format::of(Path::new("a/b.xyz")), Ok(Format::Xyz));
+        assert_eq!(Format::of(Path::new("run.lammpstrj")), Ok(Format::LammpsDump));
+        assert_eq!(Format::of(Path::new("t.jsonl")), Ok(Format::Jsonl));
+        assert!(Format::of(Path::new("t.csv")).unwrap_err().contains(".jsonl (Lagra's own), .xyz"));
+    }
+
+    #[test]
+    fn recorded_frames_replay_to_the_same_text() {
+        let mut r = Recorded::default();
+        r.frame(&state(), -1.5).unwrap();
+        r.frame(&State { step: 8, ..state() }, -1.25).unwrap();
+        let mut direct = Writer { out: vec![], format: Format::Jsonl, cell: None };
+        direct.frame(&state(), -1.5).unwrap();
+        direct.frame(&State { step: 8, ..state() }, -1.25).unwrap();
+        let mut again = Writer { out: vec![], format: Format::Jsonl, cell: None };
+        r.replay(&mut again).unwrap();
+        assert_eq!(direct.out, again.out);
+    }
+}
