@@ -191,7 +191,15 @@ mod tests {
         let mut sink = crate::trace::Recorded::default();
         let inline = run(
             scene,
-            Options { steps: None, trace: Some(&mut sink), record: None, threads: 1, progress: None, stop: None },
+            Options {
+                steps: None,
+                trace: Some(&mut sink),
+                record: None,
+                threads: 1,
+                progress: None,
+                stop: None,
+                watch: None,
+            },
         )
         .unwrap();
         assert!(overlapped.checker.starts_with("on a second thread") && inline.checker.starts_with("inline"));
@@ -256,7 +264,15 @@ mod tests {
         let mut tick = |step: u64| reached.push(step);
         let r = run(
             scene,
-            Options { steps: None, trace: None, record: None, threads: 1, progress: Some(&mut tick), stop: None },
+            Options {
+                steps: None,
+                trace: None,
+                record: None,
+                threads: 1,
+                progress: Some(&mut tick),
+                stop: None,
+                watch: None,
+            },
         );
         (r.unwrap(), reached)
     }
@@ -293,7 +309,15 @@ mod tests {
             };
             let every = run(
                 &scene,
-                Options { steps: None, trace: None, record: Some(&mut each), threads: 1, progress: None, stop: None },
+                Options {
+                    steps: None,
+                    trace: None,
+                    record: Some(&mut each),
+                    threads: 1,
+                    progress: None,
+                    stop: None,
+                    watch: None,
+                },
             )
             .unwrap();
             same(&straight, &every);
@@ -309,6 +333,28 @@ mod tests {
                 "{reached:?}"
             );
         }
+    }
+
+    /// A watch sees the state every N steps, and the run ends with the bits it has without it.
+    #[test]
+    fn a_watch_sees_every_nth_state_and_changes_nothing() {
+        let scene = melt(1e-2);
+        let plain = run(
+            &scene,
+            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
+        )
+        .unwrap();
+        let mut seen = vec![];
+        let mut see = |s: &crate::state::State| seen.push((s.step, s.x[7]));
+        let watch = Some(crate::run::Watch { every: 7, see: &mut see });
+        let watched = run(
+            &scene,
+            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch },
+        )
+        .unwrap();
+        same(&plain, &watched);
+        let steps: Vec<u64> = seen.iter().map(|s| s.0).collect();
+        assert_eq!(steps, (1..=plain.steps / 7).map(|k| 7 * k).collect::<Vec<_>>());
     }
 
     /// Progress stops a two-body run every 2¹⁹ steps (a million atom-steps), and the run ends
