@@ -144,7 +144,7 @@ fn checker(c: &mut Criterion) {
     for name in ["bench/lj_32k_checked.lagra", "kepler.lagra"] {
         let s = scene(name);
         let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone(), chain: vec![] };
-        let opts = Options { steps: Some(100), trace: None, record: None, threads: 1, progress: None, stop: None };
+        let opts = Options::plain(Some(100));
         let later = run(&s, opts).expect("the run").state;
         group.throughput(Throughput::Elements(s.x0.len() as u64));
         for (at, state) in [("reference_checkpoint", &state), ("checkpoint_at_100", &later)] {
@@ -167,8 +167,7 @@ fn end_to_end(c: &mut Criterion) {
         group.throughput(Throughput::Elements(steps));
         group.bench_function(BenchmarkId::new("steps", &s.name), |b| {
             b.iter(|| {
-                let opts =
-                    Options { steps: Some(steps), trace: None, record: None, threads: 1, progress: None, stop: None };
+                let opts = Options::plain(Some(steps));
                 black_box(run(&s, opts).expect("the run").steps)
             })
         });

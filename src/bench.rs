@@ -516,15 +516,7 @@ fn overhead(steps: u64, repeats: u32, json: bool) -> Result<String, String> {
         let t = Instant::now();
         let x = hand_oscillator(steps, dt);
         hand = hand.min(t.elapsed().as_secs_f64());
-        let opts = lagra_kernel::run::Options {
-            steps: Some(steps),
-            trace: None,
-            record: None,
-            threads: 1,
-            progress: None,
-            stop: None,
-            watch: None,
-        };
+        let opts = lagra_kernel::run::Options::plain(Some(steps));
         let rep = lagra_kernel::run::run(&scene, opts)?;
         engine = engine.min(rep.wall_s);
         agree = distance(x, rep.state.x[1]);

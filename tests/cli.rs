@@ -300,7 +300,7 @@ fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
         let trace = dir.path().join(format!("t{threads}.jsonl"));
         let o = lagra(&["run", scene, "--threads", threads, "--explain", "--trace", trace.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
-        assert!(stdout(&o).contains("plan        LennardJonesShifted: Verlet list"), "{}", stdout(&o));
+        assert!(stdout(&o).contains("plan        LennardJonesShifted: cluster-pair list"), "{}", stdout(&o));
         assert!(stdout(&o).contains("4 fixed chunks"), "{}", stdout(&o));
         traces.push(std::fs::read(trace).unwrap());
     }

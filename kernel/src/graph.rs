@@ -269,7 +269,7 @@ mod tests {
     fn the_neighbour_list_gives_the_forces_of_every_pair() {
         let (model, s) = melt();
         let g = LagrangianGraph::new(&model);
-        assert!(g.plan()[0].1.starts_with("Verlet list"), "{:?}", g.plan());
+        assert!(g.plan()[0].1.starts_with("cluster-pair list"), "{:?}", g.plan());
         let mut listed = vec![[0.0; 3]; s.x.len()];
         let e = g.forces(&s, &mut listed).unwrap();
         // every pair by the plain double loop, the shifted LJ formula written out

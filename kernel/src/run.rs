@@ -82,6 +82,12 @@ pub struct Options<'a> {
     pub watch: Option<Watch<'a>>,
 }
 
+impl Options<'_> {
+    /// A run of `steps` (the scene's if `None`) on one thread, with nothing attached.
+    pub fn plain(steps: Option<u64>) -> Self {
+        Options { steps, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None }
+    }
+}
 /// A look at the state every `every` steps.
 pub struct Watch<'a> {
     pub every: u64,

@@ -76,7 +76,7 @@ impl<W: Write> Frames for Writer<W> {
                     s.step, s.t
                 )?;
                 for (x, v) in s.x.iter().zip(&s.v) {
-                    writeln!(w, "X {} {} {} {} {} {}", x[0], x[1], x[2], v[0], v[1], v[2])?;
+                    writeln!(w, "X {} {} {} {} {} {}", N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
                 }
                 Ok(())
             }
@@ -94,15 +94,30 @@ impl<W: Write> Frames for Writer<W> {
                 });
                 writeln!(w, "ITEM: BOX BOUNDS {} {} {}", bounds[0].2, bounds[1].2, bounds[2].2)?;
                 for (lo, hi, _) in bounds {
-                    writeln!(w, "{lo} {hi}")?;
+                    writeln!(w, "{} {}", N(lo), N(hi))?;
                 }
                 // unwrapped positions: Lagra never wraps a body into the box
                 writeln!(w, "ITEM: ATOMS id type xu yu zu vx vy vz")?;
                 for (i, (x, v)) in s.x.iter().zip(&s.v).enumerate() {
-                    writeln!(w, "{} 1 {} {} {} {} {} {}", i + 1, x[0], x[1], x[2], v[0], v[1], v[2])?;
+                    writeln!(w, "{} 1 {} {} {} {} {} {}", i + 1, N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
                 }
                 Ok(())
             }
+        }
+    }
+}
+
+/// A number in text, exactly (the shortest digits that read back to the same binary64), with an
+/// exponent where plain digits would run long: 0.1, 3, 1e-300.
+struct N(f64);
+
+impl std::fmt::Display for N {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || (1e-5..1e16).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Coulomb: V = k qᵢ qⱼ / r.
 
-use super::{central, Paired};
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -11,9 +11,9 @@ impl Paired for Fast {
         p[0]
     }
     #[inline(always)]
-    fn eval(k: &f64, d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let a = k * qi * qj;
-        central(d, |r| (a / r, -a / (r * r)))
+    fn radial<L: Lane>(k: &f64, r2: L, [_, _, qi, qj]: [L; 4], _colour: L) -> (L, L) {
+        let (a, r) = (qi * *k * qj, r2.sqrt());
+        (a / r, -a / (r * r) / r)
     }
 }
 

@@ -1,8 +1,7 @@
 //! Reaction-field Coulomb: V = k qᵢ qⱼ (1/r + k_rf r² − c_rf) inside r_c;
 //! dV/dr / r = k qᵢ qⱼ (2 k_rf − 1/r³).
 
-use super::lennard_jones::cut;
-use super::Paired;
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -23,14 +22,13 @@ impl Paired for Fast {
         let krf = (e - 1.0) / ((2.0 * e + 1.0) * rc * rc * rc);
         Row { k: p[0], rc2: rc * rc, krf, crf: 1.0 / rc + krf * rc * rc }
     }
+    fn reach2(p: &Row) -> f64 {
+        p.rc2
+    }
     #[inline(always)]
-    fn eval(p: &Row, d: [f64; 3], [_, _, qi, qj]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let (krf, crf) = (p.krf, p.crf);
-        let a = p.k * qi * qj;
-        cut(d, p.rc2, |r2| {
-            let r = r2.sqrt();
-            (a * (1.0 / r + krf * r2 - crf), a * (2.0 * krf - 1.0 / (r2 * r)))
-        })
+    fn radial<L: Lane>(p: &Row, r2: L, [_, _, qi, qj]: [L; 4], _colour: L) -> (L, L) {
+        let (a, r, one) = (qi * p.k * qj, r2.sqrt(), L::splat(1.0));
+        (a * (one / r + r2 * p.krf - p.crf), a * (L::splat(2.0 * p.krf) - one / (r2 * r)))
     }
 }
 

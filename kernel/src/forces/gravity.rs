@@ -1,6 +1,6 @@
 //! Newtonian gravity: V = −G mᵢ mⱼ / r.
 
-use super::{central, Paired};
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -11,9 +11,9 @@ impl Paired for Fast {
         p[0]
     }
     #[inline(always)]
-    fn eval(g: &f64, d: [f64; 3], [mi, mj, _, _]: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let gmm = g * mi * mj;
-        central(d, |r| (-gmm / r, gmm / (r * r)))
+    fn radial<L: Lane>(g: &f64, r2: L, [mi, mj, _, _]: [L; 4], _colour: L) -> (L, L) {
+        let (gmm, r) = (mi * *g * mj, r2.sqrt());
+        (-gmm / r, gmm / (r * r) / r)
     }
 }
 

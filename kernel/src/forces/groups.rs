@@ -1,8 +1,10 @@
 //! The three loops every term runs in: over listed bodies, over all pairs, over each body.
 
+use super::clusters;
 use super::derivative::{bond_positions, coincident, Adjoint, Direction, Instance, PairDerivative, Wanted};
+use super::lanes::F64x4;
 use super::{stride_alone, sub, Bonded, Field, Force, Frame, Paired, Parts, Pool, Singularity};
-use crate::neighbours::{Neighbours, Pair};
+use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
 use crate::step::Stride;
 use crate::sum::Sum;
 use crate::traverse;
@@ -10,7 +12,6 @@ use lagra_checker::model::{Cell, Images, Model, TermInstance};
 use lagra_checker::terms::Kind;
 use rayon::prelude::*;
 use std::marker::PhantomData;
-use std::ops::Range;
 use std::sync::Mutex;
 
 /// A term's result must be finite: where its formula overflows binary64 (bodies closer than its
@@ -210,7 +211,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
         let reach = t.iter().map(|t| kind.reach(&t.1.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
         let list = reach
-            .filter(|_| (LIST_FROM..Pair::BODIES).contains(&m.bodies.len()))
+            .filter(|_| (LIST_FROM..Pair::CLUSTERS).contains(&m.bodies.len()))
             .and_then(|r| Neighbours::new(&m.cell, r))
             .map(Mutex::new);
         let rows = t.iter().map(|t| T::row(&t.1.params)).collect();
@@ -228,94 +229,50 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         })
     }
 
-    /// The pairs of the positions `blocks` of the list: forces into `f`, by position, the energy
-    /// returned. Rows are the outer loop so that each one's constants stay in registers through
-    /// the pair loop.
-    fn listed<const ENERGY: bool>(
-        &self,
-        l: &Neighbours,
-        s: &Frame,
-        blocks: Range<usize>,
-        f: &mut [[f64; 3]],
-    ) -> Result<Sum, Singularity> {
-        let x = &l.wrapped;
-        let body = |b: usize| l.bodies[b] as usize;
-        let mut energy = Sum::default();
-        for p in &self.rows {
-            for i in blocks.clone() {
-                let xi = x[i];
-                let mut fi = [0.0; 3];
-                // plain within a body's few dozen pairs, compensated across bodies
-                let mut ei = 0.0;
-                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
-                    let j = pair.j();
-                    let sh = &l.shifts[pair.image()];
-                    let d = [x[j][0] - xi[0] + sh[0], x[j][1] - xi[1] + sh[1], x[j][2] - xi[2] + sh[2]];
-                    let (mq, colour) = if T::BODIES || T::COLOUR {
-                        (bodies::<T>(s, body(i), body(j)), colour::<T>(s, body(i), body(j)))
-                    } else {
-                        ([0.0; 4], 0.0)
-                    };
-                    let (a, e) = T::eval(p, d, mq, colour).map_err(|what| Singularity {
-                        term: self.name,
-                        bodies: vec![body(i), body(j)],
-                        what,
-                    })?;
-                    for c in 0..3 {
-                        fi[c] += a[c];
-                        f[j][c] -= a[c];
-                    }
-                    if ENERGY {
-                        ei += e;
-                    }
-                }
-                for c in 0..3 {
-                    f[i][c] += fi[c];
-                }
-                energy.add(ei);
-            }
-        }
-        Ok(energy)
-    }
-
-    /// The virial −Σ d·F over the listed pairs, in the force loop's order (each pair's eval
-    /// gives zero beyond the cutoff, as there): plain within a body's pairs, compensated across.
+    /// The virial −Σ d·F over the listed pairs within the cutoff, in list order (each pair's
+    /// eval gives zero beyond it), compensated.
     fn listed_virial(&self, l: &Neighbours, s: &Frame) -> Result<f64, Singularity> {
-        let x = &l.wrapped;
-        let body = |b: usize| l.bodies[b] as usize;
         let mut w = Sum::default();
         for p in &self.rows {
-            for i in 0..l.bodies.len() {
-                let mut wi = 0.0;
-                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
-                    let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
-                    let d = [x[j][0] - x[i][0] + sh[0], x[j][1] - x[i][1] + sh[1], x[j][2] - x[i][2] + sh[2]];
-                    let (a, _) = T::eval(p, d, bodies::<T>(s, body(i), body(j)), colour::<T>(s, body(i), body(j)))
-                        .map_err(|what| Singularity { term: self.name, bodies: vec![body(i), body(j)], what })?;
-                    wi -= d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-                }
-                w.add(wi);
-            }
+            l.each_pair(|i, j, d| {
+                let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j)).map_err(|what| Singularity {
+                    term: self.name,
+                    bodies: vec![i, j],
+                    what,
+                })?;
+                w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+                Ok(())
+            })?;
         }
         Ok(w.value())
     }
 
-    /// Through the Verlet list, split by positions into chunks of about equal pair counts, each
-    /// summing into its own buffer (by position); the buffers are added in order and then given
-    /// back to the bodies.
+    /// Through the cluster-pair list (`clusters::kernel`), the i-clusters split into chunks of
+    /// about equal pair counts, each summing into its own buffer; the buffers are added in order
+    /// and then given back to the bodies. The split depends on the list alone: the same bits on
+    /// any number of threads.
     fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
-        let n = s.x.len();
-        let chunks = if n >= SPLIT_FROM { CHUNKS } else { 1 };
+        let n = l.clusters();
+        let chunks = if s.x.len() >= SPLIT_FROM { CHUNKS } else { 1 };
         let total = l.count();
         let bounds: Vec<usize> = (0..=chunks)
             .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
             .collect();
-        let mut buffers = vec![vec![[0.0; 3]; n]; chunks];
-        let work = |(c, t): (usize, &mut Vec<[f64; 3]>)| match energy {
-            true => self.listed::<true>(l, s, bounds[c]..bounds[c + 1], t),
-            false => self.listed::<false>(l, s, bounds[c]..bounds[c + 1], t),
+        let traits = clusters::traits::<T>(l, s);
+        let mut buffers = vec![vec![[F64x4::default(); 3]; n]; chunks];
+        // (two bodies at one point make the forces non-finite: `accumulate` then names them)
+        let work = |(c, buffer): (usize, &mut Vec<Cluster>)| {
+            let mut sum = Sum::default();
+            for row in &self.rows {
+                let range = bounds[c]..bounds[c + 1];
+                sum.merge(match energy {
+                    true => clusters::kernel::<T, true>(l, row, &traits, range, buffer),
+                    false => clusters::kernel::<T, false>(l, row, &traits, range, buffer),
+                });
+            }
+            sum
         };
-        let sums: Vec<Result<Sum, Singularity>> = match &self.pool {
+        let sums: Vec<Sum> = match &self.pool {
             Some(pool) if chunks > 1 => pool.install(|| buffers.par_iter_mut().enumerate().map(work).collect()),
             _ => buffers.iter_mut().enumerate().map(work).collect(),
         };
@@ -323,18 +280,21 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         for b in rest {
             for (fi, bi) in first.iter_mut().zip(b.iter()) {
                 for c in 0..3 {
-                    fi[c] += bi[c];
+                    fi[c] = fi[c] + bi[c];
                 }
             }
         }
-        for (&i, fb) in l.bodies.iter().zip(first.iter()) {
-            for c in 0..3 {
-                f[i as usize][c] += fb[c];
+        for (slot, &b) in l.bodies.iter().enumerate() {
+            if b != EMPTY {
+                let cluster = &first[slot / LANES];
+                for c in 0..3 {
+                    f[b as usize][c] += cluster[c].lane(slot % LANES);
+                }
             }
         }
         let mut energy = Sum::default();
         for part in sums {
-            energy.merge(part?);
+            energy.merge(part);
         }
         Ok(energy.value())
     }
@@ -361,47 +321,31 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             && each.iter().enumerate().all(|(k, pd)| T::jet(&self.rows[k], pd.p, 0.25 * pd.reach2.min(1e300)).is_some())
     }
 
-    /// The pullback through the Verlet list with the hand-derived jets, laid out as the force
-    /// loop is (`listed`): the covectors gathered into the list's order, each body's adjoint
-    /// summed in a register over its pairs, the parameters' in one sum per instance.
+    /// The pullback through the cluster-pair list with the hand-derived jets: each instance's
+    /// parameters' adjoints in one sum, the positions' added pair by pair.
     fn listed_pullback(&self, l: &Neighbours, g: &[[f64; 3]], each: &[PairDerivative], out: &mut Adjoint) {
-        let x = &l.wrapped;
-        let gl: Vec<[f64; 3]> = l.bodies.iter().map(|&b| g[b as usize]).collect();
-        let mut xl = vec![[0.0; 3]; gl.len()];
         for (k, pd) in each.iter().enumerate() {
             let (row, p) = (&self.rows[k], pd.p);
             let wanted: Vec<usize> = pd.which().iter().copied().filter(|&w| w < p.len()).collect();
             let mut params = [0.0; 3];
-            for i in 0..gl.len() {
-                let (xi, gi) = (x[i], gl[i]);
-                let mut acc = [0.0; 3];
-                for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
-                    let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
-                    let d = [x[j][0] - xi[0] + sh[0], x[j][1] - xi[1] + sh[1], x[j][2] - xi[2] + sh[2]];
-                    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                    if r2 >= pd.reach2 {
-                        continue;
-                    }
-                    let Some(jet) = T::jet(row, p, r2) else { continue };
-                    let dg = [gi[0] - gl[j][0], gi[1] - gl[j][1], gi[2] - gl[j][2]];
-                    let a = dg[0] * d[0] + dg[1] * d[1] + dg[2] * d[2];
-                    for c in 0..3 {
-                        let w = jet.s * dg[c] + jet.s_r * a * d[c];
-                        xl[j][c] += w;
-                        acc[c] -= w;
-                    }
-                    for &w in &wanted {
-                        params[w] += jet.ds[w] * a;
-                    }
+            let _ = l.each_pair::<()>(|i, j, d| {
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let Some(jet) = (r2 < pd.reach2).then(|| T::jet(row, p, r2)).flatten() else { return Ok(()) };
+                let dg = [g[i][0] - g[j][0], g[i][1] - g[j][1], g[i][2] - g[j][2]];
+                let a = dg[0] * d[0] + dg[1] * d[1] + dg[2] * d[2];
+                for c in 0..3 {
+                    let w = jet.s * dg[c] + jet.s_r * a * d[c];
+                    out.x[j][c] += w;
+                    out.x[i][c] -= w;
                 }
-                (0..3).for_each(|c| xl[i][c] += acc[c]);
-            }
+                for &w in &wanted {
+                    params[w] += jet.ds[w] * a;
+                }
+                Ok(())
+            });
             for &w in &wanted {
                 out.params[pd.term][w] += params[w];
             }
-        }
-        for (&b, a) in l.bodies.iter().zip(&xl) {
-            (0..3).for_each(|c| out.x[b as usize][c] += a[c]);
         }
     }
 
@@ -437,17 +381,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         };
         let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         l.update(s.x, &self.cell, self.pool.as_deref());
-        let x = &l.wrapped;
-        for i in 0..l.bodies.len() {
-            for pair in &l.pairs[l.start[i]..l.start[i + 1]] {
-                let (j, sh) = (pair.j(), &l.shifts[pair.image()]);
-                let d = [x[j][0] - x[i][0] + sh[0], x[j][1] - x[i][1] + sh[1], x[j][2] - x[i][2] + sh[2]];
-                if near(&d) {
-                    visit(l.bodies[i] as usize, l.bodies[j] as usize, d)?;
-                }
-            }
-        }
-        Ok(())
+        l.each_pair(|i, j, d| if near(&d) { visit(i, j, d) } else { Ok(()) })
     }
 
     /// Every pair a traversal visits (all pairs, or a cell list rebuilt now), each result
@@ -546,11 +480,12 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
                 let l = l.lock().unwrap_or_else(|p| p.into_inner());
                 let threads = self.pool.as_ref().map_or(1, |p| p.current_num_threads());
                 format!(
-                    "Verlet list, half (Newton's third law), {reach} + skin {:.3}, built from a cell list, {} builds, {} pairs; {} on {threads} thread(s)",
+                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} on {threads} thread(s)",
                     l.skin,
                     l.builds,
                     l.count(),
-                    if l.start.len() > SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
+                    l.clusters(),
+                    if l.bodies.len() >= SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
                 )
             }
         }

@@ -2,7 +2,7 @@
 //! for the force-shifted one): V = 4ε(s¹² − s⁶), s = σ/r; the force on i is
 //! 24ε(s⁶ − 2s¹²)/r² · d.
 
-use super::{Jet, Paired};
+use super::{Jet, Lane, Paired};
 
 /// One instance's constants: 4ε, 24ε, σ², the cutoff r_c (and r_c²), and what is taken off
 /// inside it: the energy shift, and for the force-shifted variant the slope V′(r_c).
@@ -23,24 +23,23 @@ impl Lj {
         Lj { eps4: 4.0 * eps, eps24: 24.0 * eps, sigma2: sigma * sigma, rc, rc2: rc * rc, shift, slope: 0.0 }
     }
 
-    /// The term with its shift taken off, inside the cutoff.
-    #[inline(always)]
-    pub(crate) fn shifted(&self, d: [f64; 3]) -> Result<([f64; 3], f64), &'static str> {
-        cut(d, self.rc2, |r2| self.shifted_at(r2))
+    pub(crate) fn reach2(&self) -> f64 {
+        self.rc2
     }
 
+    /// The term with its shift taken off, inside the cutoff: (V, s) at r².
     #[inline(always)]
-    pub(crate) fn shifted_at(&self, r2: f64) -> (f64, f64) {
+    pub(crate) fn shifted_at<L: Lane>(&self, r2: L) -> (L, L) {
         let (v, s) = self.at(r2);
         (v - self.shift, s)
     }
 
-    /// The force-shifted form: V − V(r_c) − (r − r_c) V′(r_c), and its derivative.
+    /// The force-shifted form: V − V(r_c) − (r − r_c) V′(r_c), and its s.
     #[inline(always)]
-    fn force_shifted_at(&self, r2: f64) -> (f64, f64) {
+    fn force_shifted_at<L: Lane>(&self, r2: L) -> (L, L) {
         let r = r2.sqrt();
         let (v, s) = self.at(r2);
-        (v - self.shift - (r - self.rc) * self.slope, s - self.slope / r)
+        (v - self.shift - (r - self.rc) * self.slope, s - L::splat(self.slope) / r)
     }
 
     /// The plain term's radial derivatives at r² for parameters (ε, σ, ...): with u = (σ/r)⁶,
@@ -57,31 +56,13 @@ impl Lj {
 
     /// The plain term and its derivative at r²: (V, dV/dr / r).
     #[inline(always)]
-    pub(crate) fn at(&self, r2: f64) -> (f64, f64) {
-        let inv = 1.0 / r2; // the one division
-        let s2 = self.sigma2 * inv;
+    pub(crate) fn at<L: Lane>(&self, r2: L) -> (L, L) {
+        let inv = L::splat(1.0) / r2; // the one division
+        let s2 = inv * self.sigma2;
         let s6 = s2 * s2 * s2;
-        (self.eps4 * (s6 * s6 - s6), self.eps24 * (s6 - 2.0 * s6 * s6) * inv)
+        // s⁶(s⁶ − 1) and s⁶(1 − 2s⁶), each product with its sum fused
+        (s6.mul_add(s6, -s6) * self.eps4, s6.mul_add(s6 * -2.0, s6) * self.eps24 * inv)
     }
-}
-
-/// Within the cutoff (r² < `rc2`), `inside(r²)` gives (V, dV/dr / r); beyond, nothing.
-/// (Computing both sides and selecting without a branch was measured slower on lj_32k.)
-#[inline(always)]
-pub(crate) fn cut(
-    d: [f64; 3],
-    rc2: f64,
-    inside: impl FnOnce(f64) -> (f64, f64),
-) -> Result<([f64; 3], f64), &'static str> {
-    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if r2 >= rc2 {
-        return Ok(([0.0; 3], 0.0));
-    }
-    if r2 == 0.0 {
-        return Err("at the same point, where the pair force is infinite");
-    }
-    let (v, s) = inside(r2);
-    Ok((d.map(|c| c * s), v))
 }
 
 pub struct Plain;
@@ -93,9 +74,12 @@ impl Paired for Plain {
     fn row(p: &[f64]) -> Lj {
         Lj::new(p[0], p[1], p[2], 0.0)
     }
+    fn reach2(lj: &Lj) -> f64 {
+        lj.rc2
+    }
     #[inline(always)]
-    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        lj.shifted(d)
+    fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
+        lj.shifted_at(r2)
     }
     fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
         Some(lj.jet_at(p, r2))
@@ -108,9 +92,12 @@ impl Paired for Shifted {
         let lj = Lj::new(p[0], p[1], p[2], 0.0);
         Lj { shift: lj.at(lj.rc2).0, ..lj } // V(r_c)
     }
+    fn reach2(lj: &Lj) -> f64 {
+        lj.rc2
+    }
     #[inline(always)]
-    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        lj.shifted(d)
+    fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
+        lj.shifted_at(r2)
     }
     /// The shift is a constant: the force's derivatives are the plain term's.
     fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
@@ -125,9 +112,12 @@ impl Paired for ForceShifted {
         let (vc, sc) = lj.at(lj.rc2);
         Lj { shift: vc, slope: sc * lj.rc, ..lj } // V′(r_c)
     }
+    fn reach2(lj: &Lj) -> f64 {
+        lj.rc2
+    }
     #[inline(always)]
-    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        cut(d, lj.rc2, |r2| lj.force_shifted_at(r2))
+    fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
+        lj.force_shifted_at(r2)
     }
     /// With V′(r_c) = r_c s(r_c) taken off the force: s − V′(r_c)/r, s_r + V′(r_c)/r³, and the
     /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c).

@@ -4,6 +4,7 @@
 //! checker's generic definitions; tests hold the two together (forces = −∇V − ∂F/∂v to
 //! round-off, energies equal).
 
+mod clusters;
 pub mod derivative;
 mod groups;
 
@@ -20,6 +21,7 @@ mod harmonic_angle;
 mod harmonic_bond;
 mod harmonic_trap;
 mod hydrogen_bond;
+pub mod lanes;
 mod lennard_jones;
 mod magnetic_field;
 mod morse_bond;
@@ -38,6 +40,7 @@ use derivative::{Adjoint, Direction, Wanted};
 use groups::{Bonds, Fields, Pairs};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
+use lanes::Lane;
 use std::fmt;
 
 /// A configuration where a term's force is undefined (bodies at one point, a bond stretched past
@@ -147,19 +150,39 @@ pub trait Bonded<const N: usize> {
     }
 }
 
-/// The force on body i and the energy of one pair, given the displacement d = x_j − x_i
-/// (the minimum image in a periodic box); body j feels the opposite force.
+/// A central pair term, given as its energy V and s = V′(r)/r at r², written once over a lane
+/// type (`Lane`): for one pair (`f64`, `eval`) and for four (`F64x4`, the cluster kernel). The
+/// force on body i is s·d, with d = x_j − x_i (the minimum image in a periodic box); body j feels
+/// the opposite force.
 pub trait Paired {
     /// One instance's constants, worked out once from its parameters, so that the pair loop does
     /// not redo per pair what depends on the parameters alone (the shifted LJ's V(r_c), 4ε, σ²).
     type Row: Copy + Send + Sync;
     fn row(p: &[f64]) -> Self::Row;
-    /// Whether `eval` reads the masses and charges [mᵢ, mⱼ, qᵢ, qⱼ], resp. the product of the
-    /// colour charges cᵢ·cⱼ: the loop loads them only if so (zeros otherwise), and the dual-number
-    /// tests, which give random masses, charges and colours, catch a wrong `false`.
+    /// Whether `radial` reads the masses and charges [mᵢ, mⱼ, qᵢ, qⱼ], resp. the product of the
+    /// colour charges cᵢ·cⱼ: the loops load them only if so (zeros otherwise), and the
+    /// dual-number tests, which give random masses, charges and colours, catch a wrong `false`.
     const BODIES: bool = false;
     const COLOUR: bool = false;
-    fn eval(r: &Self::Row, d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str>;
+    /// r_c²: at and beyond it the pair contributes nothing (∞ for a term without a cutoff).
+    fn reach2(_r: &Self::Row) -> f64 {
+        f64::INFINITY
+    }
+    /// (V, s) at 0 < r² < r_c², lane by lane.
+    fn radial<L: Lane>(r: &Self::Row, r2: L, mq: [L; 4], colour: L) -> (L, L);
+    /// One pair: the force on i and the energy; nothing beyond the cutoff, an error at r = 0.
+    #[inline(always)]
+    fn eval(r: &Self::Row, d: [f64; 3], mq: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str> {
+        let r2 = lanes::norm2(&d);
+        if r2 >= Self::reach2(r) {
+            return Ok(([0.0; 3], 0.0));
+        }
+        if r2 == 0.0 {
+            return Err(SAME_POINT);
+        }
+        let (v, s) = Self::radial(r, r2, mq, colour);
+        Ok((d.map(|c| c * s), v))
+    }
     /// The force's radial derivatives at r² inside the reach, hand-derived for the terms whose
     /// gradients run over millions of pairs (`Jet`; `p` the instance's parameters as written).
     /// `None`: the gradient code takes them from the definition (`derivatives::exact::radial`),
@@ -222,13 +245,16 @@ pub fn group(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -
     }
 }
 
-/// A central pair potential V(r) on the displacement d = xⱼ − xᵢ: `vr(r)` gives (V, dV/dr);
-/// the force on i is dV/dr · d/r.
+/// Why a pair term has no force at r = 0.
+pub(crate) const SAME_POINT: &str = "at the same point, where the pair force is infinite";
+
+/// A central potential V(r) on the displacement d (a bond's, a well's): `vr(r)` gives
+/// (V, dV/dr); the force on the first body is dV/dr · d/r.
 #[inline(always)]
 pub(crate) fn central(d: [f64; 3], vr: impl Fn(f64) -> (f64, f64)) -> Result<([f64; 3], f64), &'static str> {
     let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     if r == 0.0 {
-        return Err("at the same point, where the pair force is infinite");
+        return Err(SAME_POINT);
     }
     let (v, dv) = vr(r);
     let s = dv / r;

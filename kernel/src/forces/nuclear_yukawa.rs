@@ -1,7 +1,7 @@
 //! Toy nuclear force: V = −g e^{−r/λ} / r, whatever the charges.
 
 use super::yukawa::screened;
-use super::Paired;
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -12,8 +12,8 @@ impl Paired for Fast {
         [p[0], p[1]]
     }
     #[inline(always)]
-    fn eval(p: &[f64; 2], d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        screened(-p[0], p[1], d)
+    fn radial<L: Lane>(p: &[f64; 2], r2: L, _: [L; 4], _colour: L) -> (L, L) {
+        screened(L::splat(-p[0]), p[1], r2)
     }
 }
 

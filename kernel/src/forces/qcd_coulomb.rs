@@ -1,6 +1,6 @@
 //! Toy colour force: V = (cᵢ·cⱼ)(4α/r − 3σr), dV/dr = −(cᵢ·cⱼ)(4α/r² + 3σ).
 
-use super::{central, Paired};
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -12,9 +12,9 @@ impl Paired for Fast {
         [p[0], p[1]]
     }
     #[inline(always)]
-    fn eval(p: &[f64; 2], d: [f64; 3], _: [f64; 4], colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        let (alpha, sigma) = (p[0], p[1]);
-        central(d, |r| (colour * (4.0 * alpha / r - 3.0 * sigma * r), -colour * (4.0 * alpha / (r * r) + 3.0 * sigma)))
+    fn radial<L: Lane>(p: &[f64; 2], r2: L, _: [L; 4], colour: L) -> (L, L) {
+        let (alpha4, sigma3, r) = (L::splat(4.0 * p[0]), 3.0 * p[1], r2.sqrt());
+        (colour * (alpha4 / r - r * sigma3), -colour * (alpha4 / (r * r) + sigma3) / r)
     }
 }
 

@@ -1,7 +1,7 @@
 //! WCA: Lennard-Jones + ε inside 2^{1/6}σ, nothing beyond.
 
 use super::lennard_jones::Lj;
-use super::{Jet, Paired};
+use super::{Jet, Lane, Paired};
 use lagra_checker::terms::wca::MINIMUM;
 
 pub struct Fast;
@@ -11,9 +11,12 @@ impl Paired for Fast {
     fn row(p: &[f64]) -> Lj {
         Lj::new(p[0], p[1], MINIMUM * p[1], -p[0])
     }
+    fn reach2(lj: &Lj) -> f64 {
+        lj.reach2()
+    }
     #[inline(always)]
-    fn eval(lj: &Lj, d: [f64; 3], _: [f64; 4], _colour: f64) -> Result<([f64; 3], f64), &'static str> {
-        lj.shifted(d)
+    fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
+        lj.shifted_at(r2)
     }
     /// Inside 2^{1/6}σ the force is Lennard-Jones's (the cutoff moves with σ, but the force is
     /// zero there, so no pair's force jumps).

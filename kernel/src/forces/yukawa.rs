@@ -1,6 +1,6 @@
 //! Screened Coulomb: V = k qᵢ qⱼ e^{−r/λ} / r.
 
-use super::{central, Paired};
+use super::{Lane, Paired};
 
 pub struct Fast;
 
@@ -12,23 +12,17 @@ impl Paired for Fast {
         [p[0], p[1]]
     }
     #[inline(always)]
-    fn eval(
-        p: &[f64; 2],
-        d: [f64; 3],
-        [_, _, qi, qj]: [f64; 4],
-        _colour: f64,
-    ) -> Result<([f64; 3], f64), &'static str> {
-        screened(p[0] * qi * qj, p[1], d)
+    fn radial<L: Lane>(p: &[f64; 2], r2: L, [_, _, qi, qj]: [L; 4], _colour: L) -> (L, L) {
+        screened(qi * p[0] * qj, p[1], r2)
     }
 }
 
-/// V = a e^{−r/λ}/r, dV/dr = −V (1/λ + 1/r).
+/// a·e^(−r/λ)/r and its s, at r².
 #[inline(always)]
-pub(crate) fn screened(a: f64, range: f64, d: [f64; 3]) -> Result<([f64; 3], f64), &'static str> {
-    central(d, |r| {
-        let v = a * (-r / range).exp() / r;
-        (v, -v * (1.0 / range + 1.0 / r))
-    })
+pub(crate) fn screened<L: Lane>(a: L, range: f64, r2: L) -> (L, L) {
+    let r = r2.sqrt();
+    let v = a * (-r / L::splat(range)).exp() / r;
+    (v, -v * (L::splat(1.0 / range) + L::splat(1.0) / r) / r)
 }
 
 #[cfg(test)]

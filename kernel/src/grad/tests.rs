@@ -114,7 +114,7 @@ fn a_liquid_through_list_rebuilds_and_cutoffs() {
     let scene = compile(&liquid("lj_force_shifted")).unwrap();
     let r = grad(&scene, "energy@end", "lj_force_shifted.epsilon", Method::Reverse);
     let g = LagrangianGraph::new(&scene.model);
-    assert!(g.plan()[0].1.starts_with("Verlet list"), "{:?}", g.plan());
+    assert!(g.plan()[0].1.starts_with("cluster-pair list"), "{:?}", g.plan());
     agree(
         &liquid("lj_force_shifted"),
         "position[5].x@end",

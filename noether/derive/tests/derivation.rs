@@ -6,6 +6,7 @@ use lagra_checker::quantities::Lifted;
 use lagra_checker::terms::{Kind, Shape};
 use lagra_kernel::lang::compile;
 use lagra_kernel::run::{run, Options};
+use lagra_kernel::trace::{Format, Writer};
 use lagra_noether::{parameter_names, Symmetry, Table, Verdict};
 use lagra_noether_derive::{derive, lock::Exclusive, render, sym};
 use std::collections::HashMap;
@@ -130,13 +131,20 @@ fn verdicts_are_the_physics(t: &Table) {
 fn charges_agree_with_the_checker(t: &Table, path: &Path) {
     let source = std::fs::read_to_string(path).unwrap();
     let scene = compile(&source).unwrap_or_else(|d| panic!("{}", d.render(&path.display().to_string(), &source)));
-    let mut trace = vec![];
+    let mut trace = Writer { out: vec![], format: Format::Jsonl, cell: scene.model.cell };
     let steps = scene.solver.steps.min(200);
-    let opts =
-        Options { steps: Some(steps), trace: Some(&mut trace), record: None, threads: 1, progress: None, stop: None };
+    let opts = Options {
+        steps: Some(steps),
+        trace: Some(&mut trace),
+        record: None,
+        threads: 1,
+        progress: None,
+        stop: None,
+        watch: None,
+    };
     run(&scene, opts).unwrap();
     let frames: Vec<serde_json::Value> =
-        String::from_utf8(trace).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        String::from_utf8(trace.out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert!(!frames.is_empty());
     let symbols = ["translation", "rotation"];
     for f in frames {

@@ -1,0 +1,236 @@
+//! The cluster-pair kernel: for each listed pair of clusters (`neighbours`), the sixteen body
+//! pairs as four rows of four lanes — body a of the i-cluster broadcast against the j-cluster's
+//! four — through the term's one radial formula (`Paired::radial` on `F64x4`). The cutoff, the
+//! empty slots and, on a cluster's pairs with itself, the lower triangle are masks, not
+//! branches. A j-cluster's forces are one vector update per cluster pair; an i-body's lanes are
+//! added once, after all its cluster's pairs (Newton's third law throughout).
+//!
+//! The order of every sum is fixed by the list, so the forces are the same bits for any number
+//! of threads; lane k of every row is bit for bit the scalar formula on that pair.
+
+use super::lanes::{norm2, F64x4, Lane, Mask4};
+use super::{Frame, Paired};
+use crate::neighbours::{Cluster, Neighbours, CENTRE, EMPTY, LANES};
+use crate::sum::Sum;
+use std::ops::Range;
+
+/// On a cluster's pairs with itself (zero image), body a meets only the slots after it.
+fn after(a: usize) -> Mask4 {
+    Mask4::new(std::array::from_fn(|b| b > a))
+}
+
+/// What a term reads of the bodies besides their positions, by cluster: masses, charges and the
+/// two colour components, for the terms that read them (`Paired::BODIES`, `COLOUR`).
+#[derive(Clone, Copy, Default)]
+pub struct Traits {
+    m: F64x4,
+    q: F64x4,
+    c: [F64x4; 2],
+}
+
+/// Gathers the bodies' traits by cluster, if the term reads any (else nothing).
+pub fn traits<T: Paired>(l: &Neighbours, s: &Frame) -> Vec<Traits> {
+    if !(T::BODIES || T::COLOUR) {
+        return vec![];
+    }
+    l.bodies
+        .chunks(LANES)
+        .map(|slots| {
+            let of = |get: &dyn Fn(usize) -> f64| {
+                F64x4::new(std::array::from_fn(|k| if slots[k] == EMPTY { 0.0 } else { get(slots[k] as usize) }))
+            };
+            Traits { m: of(&|b| s.m[b]), q: of(&|b| s.q[b]), c: [of(&|b| s.c[b][0]), of(&|b| s.c[b][1])] }
+        })
+        .collect()
+}
+
+/// Row `row`'s forces over the i-clusters `range` added to `f` (by cluster), and its energy if
+/// `ENERGY`: plain within an i-cluster's pairs, compensated across clusters.
+#[inline(never)]
+pub fn kernel<T: Paired, const ENERGY: bool>(
+    l: &Neighbours,
+    row: &T::Row,
+    traits: &[Traits],
+    range: Range<usize>,
+    f: &mut [Cluster],
+) -> Sum {
+    let zero = F64x4::splat(0.0);
+    let rc2 = F64x4::splat(T::reach2(row));
+    let after: [Mask4; LANES] = std::array::from_fn(after);
+    let mut energy = Sum::default();
+    for ic in range {
+        let xi = l.x[ic];
+        // the rows of body a: none for an empty slot (no branch in the loop)
+        let own: [Mask4; LANES] = std::array::from_fn(|a| Mask4::new([l.filled[ic].holds(a); LANES]));
+        let mut fi = [[zero; 3]; LANES];
+        let mut e = zero;
+        for p in &l.pairs[l.start[ic]..l.start[ic + 1]] {
+            let (jc, sh) = (p.j(), &l.shifts[p.image()]);
+            let xj = &l.x[jc];
+            let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
+            let rows: [Mask4; LANES] = if jc == ic && p.image() == CENTRE {
+                std::array::from_fn(|a| own[a] & l.filled[jc] & after[a])
+            } else {
+                std::array::from_fn(|a| own[a] & l.filled[jc])
+            };
+            let mut fj = [zero; 3];
+            for (a, fa) in fi.iter_mut().enumerate() {
+                let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
+                let r2 = norm2(&d);
+                let inside = r2.lt(rc2) & rows[a];
+                // Masked lanes may hold an infinity or a NaN (a slot against itself, an empty
+                // slot): the mask clears them. An unmasked one (two bodies at one point) makes
+                // the forces non-finite, which the caller finds and names.
+                let (mq, colour) = pair_traits::<T>(traits, ic, a, jc);
+                let (v, s) = T::radial(row, r2, mq, colour);
+                let s = inside.and(s);
+                for c in 0..3 {
+                    fa[c] = d[c].mul_add(s, fa[c]);
+                    fj[c] = (-d[c]).mul_add(s, fj[c]);
+                }
+                if ENERGY {
+                    e = e + inside.and(v);
+                }
+            }
+            for c in 0..3 {
+                f[jc][c] = f[jc][c] + fj[c];
+            }
+        }
+        for c in 0..3 {
+            f[ic][c] = f[ic][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
+        }
+        if ENERGY {
+            energy.add(e.sum());
+        }
+    }
+    energy
+}
+
+/// [mᵢ, mⱼ, qᵢ, qⱼ] and cᵢ·cⱼ for body a of cluster `ic` against cluster `jc`'s four, if the
+/// term reads them (zeros, and no loads, if not).
+#[inline(always)]
+fn pair_traits<T: Paired>(traits: &[Traits], ic: usize, a: usize, jc: usize) -> ([F64x4; 4], F64x4) {
+    let zero = F64x4::splat(0.0);
+    if !(T::BODIES || T::COLOUR) {
+        return ([zero; 4], zero);
+    }
+    let (i, j) = (&traits[ic], &traits[jc]);
+    let mq = [F64x4::splat(i.m.lane(a)), j.m, F64x4::splat(i.q.lane(a)), j.q];
+    let colour = j.c[0] * i.c[0].lane(a) + j.c[1] * i.c[1].lane(a);
+    (mq, colour)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{coulomb_reaction_field, lennard_jones, qcd_coulomb, wca, yukawa};
+    use super::*;
+    use crate::forces::dual::Rng;
+    use lagra_checker::model::Cell;
+
+    /// Lane k of the four-lane formula is the scalar formula at lane k's r², bit for bit, for
+    /// every pair term.
+    fn lanes_are_the_scalar_formula<T: Paired>(p: &[f64], far: f64) {
+        let row = T::row(p);
+        let mut rng = Rng::new(9);
+        for _ in 0..1000 {
+            let r2 = F64x4::new(std::array::from_fn(|_| rng.uniform(0.05, far).powi(2)));
+            let mq: [F64x4; 4] = std::array::from_fn(|_| F64x4::new(std::array::from_fn(|_| rng.uniform(-2.0, 2.0))));
+            let colour = F64x4::new(std::array::from_fn(|_| rng.uniform(-1.0, 1.0)));
+            let (v, s) = T::radial(&row, r2, mq, colour);
+            for k in 0..LANES {
+                let (v1, s1) = T::radial(&row, r2.lane(k), mq.map(|m| m.lane(k)), colour.lane(k));
+                assert_eq!((v.lane(k).to_bits(), s.lane(k).to_bits()), (v1.to_bits(), s1.to_bits()));
+            }
+        }
+    }
+
+    #[test]
+    fn every_pair_term_is_one_formula_in_one_lane_or_four() {
+        lanes_are_the_scalar_formula::<lennard_jones::Plain>(&[1.0, 1.0, 2.5], 3.0);
+        lanes_are_the_scalar_formula::<lennard_jones::Shifted>(&[1.2, 0.9, 2.5], 3.0);
+        lanes_are_the_scalar_formula::<lennard_jones::ForceShifted>(&[0.8, 1.1, 3.0], 3.0);
+        lanes_are_the_scalar_formula::<wca::Fast>(&[1.0, 1.0], 1.2);
+        lanes_are_the_scalar_formula::<coulomb_reaction_field::Fast>(&[1.0, 2.0, 78.0], 2.5);
+        lanes_are_the_scalar_formula::<yukawa::Fast>(&[1.0, 1.5], 5.0);
+        lanes_are_the_scalar_formula::<super::super::coulomb::Fast>(&[1.0], 5.0);
+        lanes_are_the_scalar_formula::<super::super::gravity::Fast>(&[1.0], 5.0);
+        lanes_are_the_scalar_formula::<super::super::nuclear_yukawa::Fast>(&[1.0, 2.0], 5.0);
+        lanes_are_the_scalar_formula::<qcd_coulomb::Fast>(&[0.3, 0.2], 5.0);
+    }
+
+    /// A random liquid-like box and a list over it.
+    fn liquid(n: usize, seed: u64) -> (Vec<[f64; 3]>, Option<Cell>, Neighbours) {
+        let mut rng = Rng::new(seed);
+        let side = (n as f64 / 0.8).cbrt();
+        let cell = Some(Cell { size: [side; 3], periodic: [true; 3] });
+        // a jittered lattice, so that no two bodies come unphysically close
+        let k = (n as f64).cbrt().ceil() as usize;
+        let x: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                let g = [i % k, (i / k) % k, i / (k * k)];
+                std::array::from_fn(|a| (g[a] as f64 + rng.uniform(-0.2, 0.2)) * side / k as f64)
+            })
+            .collect();
+        let mut l = Neighbours::new(&cell, 2.5).unwrap();
+        l.update(&x, &cell, None);
+        (x, cell, l)
+    }
+
+    /// The kernel's forces and energy against the scalar formula summed pair by pair over the
+    /// same list: the same pairs, summed in another order, so equal to within the summation
+    /// bound |error| ≤ 2(n − 1)ε Σ|terms| per body (n its pairs), held here with n = 200.
+    #[test]
+    fn the_kernel_is_the_scalar_sum_within_its_rounding_bound() {
+        let (x, _, l) = liquid(1000, 4);
+        let p = [1.0, 1.0, 2.5];
+        let row = lennard_jones::Shifted::row(&p);
+        let mut f = vec![[F64x4::default(); 3]; l.clusters()];
+        let e = kernel::<lennard_jones::Shifted, true>(&l, &row, &[], 0..l.clusters(), &mut f).value();
+        let (mut scalar, mut size, mut es) = (vec![[0.0; 3]; x.len()], vec![0.0; x.len()], 0.0);
+        l.each_pair::<()>(|i, j, d| {
+            let (a, v) = lennard_jones::Shifted::eval(&row, d, [0.0; 4], 0.0).unwrap();
+            for c in 0..3 {
+                scalar[i][c] += a[c];
+                scalar[j][c] -= a[c];
+            }
+            let m = a[0].abs() + a[1].abs() + a[2].abs();
+            size[i] += m;
+            size[j] += m;
+            es += v;
+            Ok(())
+        })
+        .unwrap();
+        let mut worst = 0.0f64;
+        for (slot, &b) in l.bodies.iter().enumerate() {
+            if b != EMPTY {
+                let b = b as usize;
+                for c in 0..3 {
+                    let off = (f[slot / LANES][c].lane(slot % LANES) - scalar[b][c]).abs();
+                    worst = worst.max(off / (size[b] * f64::EPSILON));
+                }
+            }
+        }
+        assert!(worst < 400.0, "{worst} ulps of the pair forces' size");
+        assert!(worst > 0.0, "the orders differ, so some bits should");
+        assert!((e - es).abs() < 1e-12 * es.abs(), "{e} vs {es}");
+    }
+
+    /// Two bodies at one point inside the cutoff give non-finite forces (which the group then
+    /// names), and no other pair does.
+    #[test]
+    fn coincident_bodies_give_non_finite_forces() {
+        let (mut x, cell, _) = liquid(300, 5);
+        x[17] = x[42];
+        let mut l = Neighbours::new(&cell, 2.5).unwrap();
+        l.update(&x, &cell, None);
+        let row = lennard_jones::Plain::row(&[1.0, 1.0, 2.5]);
+        let mut f = vec![[F64x4::default(); 3]; l.clusters()];
+        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &mut f);
+        assert!(f.iter().flatten().any(|c| c.to_array().iter().any(|v| !v.is_finite())));
+        x[17][0] += 0.9;
+        l.update(&x, &cell, None);
+        let mut f = vec![[F64x4::default(); 3]; l.clusters()];
+        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &mut f);
+        assert!(f.iter().flatten().all(|c| c.to_array().iter().all(|v| v.is_finite())));
+    }
+}
