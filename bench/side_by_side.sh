@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Lagra and LAMMPS side by side, in one run on this machine; rewrites the results section of
-# docs/bench/README.md. Needs LAMMPS (`bash ../shared/peers/lammps.sh install`, Debian `lammps`).
+# Lagra, LAMMPS and GROMACS side by side, in one run on this machine; rewrites the results
+# section of docs/bench/README.md. Needs LAMMPS (`bash ../shared/peers/lammps.sh install`, Debian
+# `lammps`); GROMACS (`bash ../shared/peers/gromacs.sh install`) for its columns, skipped without.
 #   bash bench/side_by_side.sh            # everything (about 5 minutes)
 #   bash bench/side_by_side.sh --no-drift # skip the two 10,000-step drift runs
 # The 100-step timings are the fastest of REPEATS runs (default 3), interleaved: the run least
@@ -21,7 +22,7 @@ lammps_ns() { awk '/Loop time of/ {printf "%.1f", $4/$9/$12*1e9}' "$1"; }
 json() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 repeats=${REPEATS:-3}
 # keep FILE.try as FILE if it is the fastest yet (Lagra's JSON wall_s, or LAMMPS's loop time)
-seconds() { case "$1" in *.json*) json "$1" wall_s ;; *) awk '/Loop time of/ {print $4}' "$1" ;; esac; }
+seconds() { case "$1" in *.json*) json "$1" wall_s ;; *.gmx*) awk '/^ns_per_atom_step/ {print $2}' "$1" ;; *) awk '/Loop time of/ {print $4}' "$1" ;; esac; }
 keep_faster() { if [ ! -e "$1" ] || python3 -c "import sys; sys.exit(not float(sys.argv[1]) < float(sys.argv[2]))" "$(seconds "$1.try")" "$(seconds "$1")"; then mv "$1.try" "$1"; else rm "$1.try"; fi; }
 
 echo "LJ 32k, LAMMPS" >&2
@@ -40,6 +41,21 @@ for k in $(seq "$repeats"); do
   taskset -c 0 "$lagra" run scenes/bench/lj_32k.lagra --json > "$out/lj32k_1.json.try" && keep_faster "$out/lj32k_1.json"
   taskset -c 0,1 "$lagra" run scenes/bench/lj_32k.lagra --threads 2 --json > "$out/lj32k_2.json.try" && keep_faster "$out/lj32k_2.json"
 done
+echo "LJ 32k, 1000 steps: GROMACS (mixed and double precision), LAMMPS -sf opt, Lagra" >&2
+# GROMACS counts the second half of its run (-resethway: set-up and the first list build left
+# out); LAMMPS and Lagra count the whole run, build included
+rm -f "$out"/gmx_*.gmx "$out"/lj32k_1000_*.json "$work"/w1k.log
+for k in $(seq "$repeats"); do
+  if command -v gmx >/dev/null; then
+    GROMACS_WORK="$work/gmx" bash "$peers/gromacs.sh" w1 20 1.44 1000 None gmx > "$out/gmx_mixed.gmx.try" && keep_faster "$out/gmx_mixed.gmx"
+    GROMACS_WORK="$work/gmx" bash "$peers/gromacs.sh" w1 20 1.44 1000 None gmx_d > "$out/gmx_double.gmx.try" && keep_faster "$out/gmx_double.gmx"
+  fi
+  (cd "$work" && taskset -c 0 lmp -in w1.lmp -var n 20 -var nsteps 1000 -sf opt -log w1k.log.try -screen none && keep_faster w1k.log)
+  taskset -c 0 "$lagra" run scenes/bench/lj_32k.lagra --steps 1000 --json > "$out/lj32k_1000_1.json.try" && keep_faster "$out/lj32k_1000_1.json"
+  taskset -c 0,1 "$lagra" run scenes/bench/lj_32k.lagra --steps 1000 --threads 2 --json > "$out/lj32k_1000_2.json.try" && keep_faster "$out/lj32k_1000_2.json"
+done
+echo "LJ 4M atoms, 10 steps: time and memory" >&2
+taskset -c 0,1 /usr/bin/time -f "%M" -o "$out/lj4m.rss" "$lagra" run scenes/bench/lj_4m.lagra --threads 2 --json > "$out/lj4m.json"
 echo "two particles" >&2
 (cd "$work" && taskset -c 0 lmp -in w0.lmp -var nsteps 1000000 -log w0.log -screen none)
 taskset -c 0 "$lagra" run scenes/bench/lj_pair.lagra --json > "$out/pair.json"
@@ -120,6 +136,25 @@ print("Neighbour-list builds in the 100 steps: LAMMPS's bench input rebuilds eve
       f"displacements since the last build could have closed the skin ({ours} builds). LAMMPS `-sf opt` with its own check "
       f"every step (`neigh_modify delay 0 every 1 check yes`): {ns('w1check.log'):.0f} ns/atom-step, {builds('w1check.log')} builds; "
       f"Lagra / that: **{l1['ns_per_atom_step']/ns('w1check.log'):.2f}×**.\n")
+import os.path
+print("### LJ benchmark, 1,000 NVE steps (the bench/in.lj system), ns per atom-step, lower is better\n")
+print("Lagra and LAMMPS count the whole run (set-up and every list build included); GROMACS, as `gromacs.sh` runs it, the second half (`-resethway`). GROMACS 2022.5 is Debian's build (SIMD: SSE4.1); `mixed` is its default single-precision build, `double` is `gmx_d`. One thread each, pinned.\n")
+g = lambda n: float(open(f"{out}/{n}").read().split("ns_per_atom_step")[1].split()[0]) if os.path.exists(f"{out}/{n}") else None
+gm, gd = g("gmx_mixed.gmx"), g("gmx_double.gmx")
+k1, k2 = j("lj32k_1000_1.json"), j("lj32k_1000_2.json")
+print("| engine | precision | 1 thread | 2 threads |\n|---|---|---|---|")
+if gm: print(f"| GROMACS 2022.5 | mixed (f32 forces) | {gm:.0f} | |")
+if gd: print(f"| GROMACS 2022.5 | double | {gd:.0f} | |")
+print(f"| LAMMPS `-sf opt` | double | {ns('w1k.log'):.0f} | |")
+print(f"| Lagra | double | {k1['ns_per_atom_step']:.0f} | {k2['ns_per_atom_step']:.0f} |")
+if gm: print(f"\nLagra / GROMACS mixed precision on one thread: **{k1['ns_per_atom_step']/gm:.2f}×** the time per atom-step (goal ≤ 0.95×); / GROMACS double: **{k1['ns_per_atom_step']/gd:.2f}×**.\n")
+plan = k1["plan"][0][1]
+pairs = int(re.search(r"(\d+) cluster pairs", plan)[1]); builds = int(re.search(r"(\d+) builds", plan)[1])
+mhz = max(float(l.split(":")[1]) for l in open("/proc/cpuinfo") if l.startswith("cpu MHz"))
+lanes = 16 * pairs * 1000 / k1["wall_s"]
+print(f"Lagra's plan: {plan}. The kernel computes 16 body pairs per cluster pair: {lanes/1e9:.2f}·10⁹ body pairs per second over the whole run (list builds included); at 30 flops a pair (FMA as two, the division as one) that is {30*lanes/1e9:.1f} GFLOP/s, against this core's peak of {16*mhz/1e3:.1f} GFLOP/s (two 256-bit FMA pipes at the {mhz:.0f} MHz /proc/cpuinfo reports).\n")
+m = j("lj4m.json"); rss = int(open(f"{out}/lj4m.rss").read().split()[-1]) * 1024
+print(f"**4,000,000 atoms** (`scenes/bench/lj_4m.lagra`, {m['steps']} steps, 2 threads): {m['ns_per_atom_step']:.0f} ns/atom-step, {m['wall_s']:.1f} s in all, peak resident memory {rss/2**30:.2f} GiB ({rss/4e6:.0f} bytes an atom).\n")
 t, s, a = lammps("w0.log"); p = j("pair.json")
 print("### Two LJ particles (per-step overhead), steps per second, higher is better\n")
 print("| LAMMPS (w0) | Lagra (lj_pair) | Lagra / LAMMPS |\n|---|---|---|")
