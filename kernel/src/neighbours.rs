@@ -13,7 +13,7 @@
 //! together moved more than the skin: until then no unlisted pair can have come within reach.
 //! Everything here depends on the positions alone, never on the number of threads.
 
-use crate::forces::lanes::{F64x4, Lane, Mask4};
+use crate::forces::lanes::{norm2, F64x4, Lane};
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
@@ -62,8 +62,6 @@ pub struct Neighbours {
     pub skin: f64,
     /// The body in each slot (cluster c holds slots 4c..4c + 4), or `EMPTY`.
     pub bodies: Vec<u32>,
-    /// Which slots of each cluster hold a body.
-    pub filled: Vec<Mask4>,
     /// The j-clusters of i-cluster c are `pairs[start[c]..start[c + 1]]`.
     pub start: Vec<usize>,
     pub pairs: Vec<Pair>,
@@ -74,8 +72,9 @@ pub struct Neighbours {
     at: Vec<[f64; 3]>,
     /// What was taken off each slot's body to wrap it into the box at the last build.
     offset: Vec<[f64; 3]>,
-    /// The positions minus `offset`, by cluster, as of the last `update`: what the kernel reads
-    /// (empty slots at 0, masked by `filled`).
+    /// The positions minus `offset`, by cluster, as of the last `update`: what the kernel reads.
+    /// An empty slot sits far from every body and every other slot (`far`), so that the cutoff
+    /// leaves it out with no mask of its own.
     pub x: Vec<Cluster>,
     pub builds: u64,
 }
@@ -101,7 +100,6 @@ impl Neighbours {
             reach,
             skin,
             bodies: vec![],
-            filled: vec![],
             start: vec![],
             pairs: vec![],
             shifts,
@@ -139,7 +137,7 @@ impl Neighbours {
             self.build(x, cell, pool);
         }
         for (c, cluster) in self.x.iter_mut().enumerate() {
-            let mut lanes = [[0.0; LANES]; 3];
+            let mut lanes = cluster.map(F64x4::to_array);
             for (lane, slot) in (LANES * c..LANES * (c + 1)).enumerate() {
                 let b = self.bodies[slot];
                 if b != EMPTY {
@@ -168,15 +166,15 @@ impl Neighbours {
         let columns = Columns::new(&wrapped, cell);
         let (slots, first) = columns.clusters(&wrapped);
         self.bodies = slots;
-        self.filled = self.bodies.chunks(LANES).map(|s| Mask4::new(std::array::from_fn(|k| s[k] != EMPTY))).collect();
         self.offset = self.bodies.iter().map(|&b| if b == EMPTY { [0.0; 3] } else { offset[b as usize] }).collect();
-        self.x = self
-            .bodies
-            .chunks(LANES)
-            .map(|s| {
-                std::array::from_fn(|k| {
-                    F64x4::new(std::array::from_fn(|l| if s[l] == EMPTY { 0.0 } else { wrapped[s[l] as usize][k] }))
-                })
+        let far = far(&wrapped, self.reach + self.skin);
+        self.x = (0..self.bodies.len() / LANES)
+            .map(|c| {
+                let at = |slot: usize| match self.bodies[slot] {
+                    EMPTY => far(slot),
+                    b => wrapped[b as usize],
+                };
+                std::array::from_fn(|k| F64x4::new(std::array::from_fn(|l| at(LANES * c + l)[k])))
             })
             .collect();
         let boxes: Vec<Bounds> = self
@@ -189,7 +187,6 @@ impl Neighbours {
             first: &first,
             boxes: &boxes,
             x: &self.x,
-            filled: &self.filled,
             shifts: &self.shifts,
             r: self.reach + self.skin,
         };
@@ -240,6 +237,14 @@ impl Neighbours {
     }
 }
 
+/// Where empty slots sit: 10 r beyond the farthest coordinate of any body, 4 r apart along x,
+/// so that no body and no other empty slot is within r of one, the bodies' moves between builds
+/// (less than the skin) included, and no distance to one squares into a subnormal's range.
+fn far(w: &[[f64; 3]], r: f64) -> impl Fn(usize) -> [f64; 3] {
+    let base = w.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs())) + 10.0 * r + 1.0;
+    move |slot| [base + 4.0 * r * slot as f64, base, base]
+}
+
 /// An axis-aligned box around a cluster's bodies.
 #[derive(Clone, Copy)]
 struct Bounds {
@@ -253,16 +258,6 @@ impl Bounds {
             lo: std::array::from_fn(|a| b.lo[a].min(p[a])),
             hi: std::array::from_fn(|a| b.hi[a].max(p[a])),
         })
-    }
-
-    /// The squared distance between this box and `o` moved by `s`.
-    fn gap2(&self, o: &Bounds, s: &[f64; 3]) -> f64 {
-        (0..3)
-            .map(|a| {
-                let g = (o.lo[a] + s[a] - self.hi[a]).max(self.lo[a] - (o.hi[a] + s[a])).max(0.0);
-                g * g
-            })
-            .sum()
     }
 }
 
@@ -350,7 +345,6 @@ struct Search<'a> {
     first: &'a [usize],
     boxes: &'a [Bounds],
     x: &'a [Cluster],
-    filled: &'a [Mask4],
     shifts: &'a [[f64; 3]; 32],
     r: f64,
 }
@@ -375,16 +369,17 @@ impl Search<'_> {
         (start, pairs)
     }
 
-    /// Whether some body of cluster `ic` lies within r of one of cluster `jc` moved by `s`: boxes
-    /// within r whose bodies are not (a third of them on a dense liquid) are left out.
+    /// Whether some body of cluster `ic` lies within r of one of cluster `jc` moved by `s` (empty
+    /// slots are far from everything): boxes within r whose bodies are not (a third of them on a
+    /// dense liquid) are left out. Sixteen distances, no branch.
+    #[inline(always)]
     fn touch(&self, ic: usize, jc: usize, s: &[f64; 3]) -> bool {
         let (xi, xj) = (&self.x[ic], &self.x[jc]);
         let xs = [xj[0] + s[0], xj[1] + s[1], xj[2] + s[2]];
-        let far = F64x4::splat(f64::INFINITY);
-        let mut least = far;
-        for a in (0..LANES).filter(|&a| self.filled[ic].holds(a)) {
+        let mut least = F64x4::splat(f64::INFINITY);
+        for a in 0..LANES {
             let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
-            least = least.min(F64x4::select(self.filled[jc], d[0] * d[0] + d[1] * d[1] + d[2] * d[2], far));
+            least = least.min(norm2(&d));
         }
         least.least() < self.r * self.r
     }
@@ -444,15 +439,18 @@ impl Search<'_> {
                     while *to < run.len() && run[*to].lo[2] + sz <= b.hi[2] + self.r {
                         *to += 1;
                     }
-                    for (k, o) in run.iter().enumerate().take(*to).skip(*from) {
-                        let jc = self.first[col] + k;
-                        if jc < ic || (jc == ic && image < CENTRE) {
-                            continue;
-                        }
-                        if b.gap2(o, s) < self.r * self.r && self.touch(ic, jc, s) {
-                            out.push(Pair::new(jc, image));
-                        }
+                    // bodies within r imply boxes within r: the sixteen distances alone decide,
+                    // each candidate written and kept by advancing the end (no branch to miss)
+                    let base = self.first[col];
+                    let from = (*from + base).max(if image >= CENTRE { ic } else { ic + 1 });
+                    let to = *to + base;
+                    let mut end = out.len();
+                    out.resize(end + to.saturating_sub(from), Pair(0));
+                    for jc in from..to {
+                        out[end] = Pair::new(jc, image);
+                        end += usize::from(self.touch(ic, jc, s));
                     }
+                    out.truncate(end);
                 }
             }
         }

@@ -57,29 +57,25 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
     let zero = F64x4::splat(0.0);
     let rc2 = F64x4::splat(T::reach2(row));
     let after: [Mask4; LANES] = std::array::from_fn(after);
+    let all = [Mask4::new([true; LANES]); LANES];
     let mut energy = Sum::default();
     for ic in range {
         let xi = l.x[ic];
-        // the rows of body a: none for an empty slot (no branch in the loop)
-        let own: [Mask4; LANES] = std::array::from_fn(|a| Mask4::new([l.filled[ic].holds(a); LANES]));
         let mut fi = [[zero; 3]; LANES];
         let mut e = zero;
         for p in &l.pairs[l.start[ic]..l.start[ic + 1]] {
             let (jc, sh) = (p.j(), &l.shifts[p.image()]);
             let xj = &l.x[jc];
             let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
-            let rows: [Mask4; LANES] = if jc == ic && p.image() == CENTRE {
-                std::array::from_fn(|a| own[a] & l.filled[jc] & after[a])
-            } else {
-                std::array::from_fn(|a| own[a] & l.filled[jc])
-            };
+            // (empty slots sit beyond every cutoff: `Neighbours::x`)
+            let rows = if jc == ic && p.image() == CENTRE { after } else { all };
             let mut fj = [zero; 3];
             for (a, fa) in fi.iter_mut().enumerate() {
                 let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
                 let r2 = norm2(&d);
                 let inside = r2.lt(rc2) & rows[a];
-                // Masked lanes may hold an infinity or a NaN (a slot against itself, an empty
-                // slot): the mask clears them. An unmasked one (two bodies at one point) makes
+                // Masked lanes may hold an infinity or a NaN (a slot against itself): the mask
+                // clears them. An unmasked one (two bodies at one point) makes
                 // the forces non-finite, which the caller finds and names.
                 let (mq, colour) = pair_traits::<T>(traits, ic, a, jc);
                 let (v, s) = T::radial(row, r2, mq, colour);
