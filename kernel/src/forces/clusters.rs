@@ -82,7 +82,7 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
                 let s = inside.and(s);
                 for c in 0..3 {
                     fa[c] = d[c].mul_add(s, fa[c]);
-                    fj[c] = (-d[c]).mul_add(s, fj[c]);
+                    fj[c] = d[c].mul_neg_add(s, fj[c]);
                 }
                 if ENERGY {
                     e = e + inside.and(v);

@@ -132,6 +132,11 @@ impl F64x4 {
     pub fn lane(&self, k: usize) -> f64 {
         self.0.as_array()[k]
     }
+    /// b − self·a, rounded once.
+    #[inline(always)]
+    pub fn mul_neg_add(self, a: F64x4, b: F64x4) -> F64x4 {
+        F64x4(self.0.mul_neg_add(a.0, b.0))
+    }
     #[inline(always)]
     pub fn lt(self, o: F64x4) -> Mask4 {
         Mask4(self.0.simd_lt(o.0))
