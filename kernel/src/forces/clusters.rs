@@ -55,41 +55,18 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
     f: &mut [Cluster],
 ) -> Sum {
     let zero = F64x4::splat(0.0);
-    let rc2 = F64x4::splat(T::reach2(row));
-    let after: [Mask4; LANES] = std::array::from_fn(after);
-    let all = [Mask4::new([true; LANES]); LANES];
     let mut energy = Sum::default();
     for ic in range {
-        let xi = l.x[ic];
         let mut fi = [[zero; 3]; LANES];
         let mut e = zero;
         for p in &l.pairs[l.start[ic]..l.start[ic + 1]] {
-            let (jc, sh) = (p.j(), &l.shifts[p.image()]);
-            let xj = &l.x[jc];
-            let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
-            // (empty slots sit beyond every cutoff: `Neighbours::x`)
-            let rows = if jc == ic && p.image() == CENTRE { after } else { all };
-            let mut fj = [zero; 3];
-            for (a, fa) in fi.iter_mut().enumerate() {
-                let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
-                let r2 = norm2(&d);
-                let inside = r2.lt(rc2) & rows[a];
-                // Masked lanes may hold an infinity or a NaN (a slot against itself): the mask
-                // clears them. An unmasked one (two bodies at one point) makes
-                // the forces non-finite, which the caller finds and names.
-                let (mq, colour) = pair_traits::<T>(traits, ic, a, jc);
-                let (v, s) = T::radial(row, r2, mq, colour);
-                let s = inside.and(s);
-                for c in 0..3 {
-                    fa[c] = d[c].mul_add(s, fa[c]);
-                    fj[c] = d[c].mul_neg_add(s, fj[c]);
-                }
-                if ENERGY {
-                    e = e + inside.and(v);
-                }
-            }
-            for c in 0..3 {
-                f[jc][c] = f[jc][c] + fj[c];
+            let jc = p.j();
+            // a cluster with itself at the zero image: each pair once, the lower triangle masked
+            // (a separate instance, so that every other pair goes without the mask)
+            if jc == ic && p.image() == CENTRE {
+                rows::<T, ENERGY, true>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, f);
+            } else {
+                rows::<T, ENERGY, false>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, f);
             }
         }
         for c in 0..3 {
@@ -100,6 +77,47 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
         }
     }
     energy
+}
+
+/// One cluster pair's sixteen body pairs, as four rows: body a of the i-cluster against the
+/// j-cluster's four lanes; its forces into `fi` and `f[jc]`, its energy into `e`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
+    l: &Neighbours,
+    row: &T::Row,
+    traits: &[Traits],
+    (ic, jc, image): (usize, usize, usize),
+    fi: &mut [[F64x4; 3]; LANES],
+    e: &mut F64x4,
+    f: &mut [Cluster],
+) {
+    let rc2 = F64x4::splat(T::reach2(row));
+    let (xi, xj, sh) = (&l.x[ic], &l.x[jc], &l.shifts[image]);
+    let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
+    let mut fj = [F64x4::splat(0.0); 3];
+    for (a, fa) in fi.iter_mut().enumerate() {
+        let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
+        let r2 = norm2(&d);
+        // (empty slots sit beyond every cutoff: `Neighbours::x`)
+        let inside = if DIAGONAL { r2.lt(rc2) & after(a) } else { r2.lt(rc2) };
+        // Masked lanes may hold an infinity or a NaN (a slot against itself): the mask clears
+        // them. An unmasked one (two bodies at one point) makes the forces non-finite, which the
+        // caller finds and names.
+        let (mq, colour) = pair_traits::<T>(traits, ic, a, jc);
+        let (v, s) = T::radial(row, r2, mq, colour);
+        let s = inside.and(s);
+        for c in 0..3 {
+            fa[c] = d[c].mul_add(s, fa[c]);
+            fj[c] = d[c].mul_neg_add(s, fj[c]);
+        }
+        if ENERGY {
+            *e = *e + inside.and(v);
+        }
+    }
+    for c in 0..3 {
+        f[jc][c] = f[jc][c] + fj[c];
+    }
 }
 
 /// [mᵢ, mⱼ, qᵢ, qⱼ] and cᵢ·cⱼ for body a of cluster `ic` against cluster `jc`'s four, if the
