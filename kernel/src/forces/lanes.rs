@@ -141,11 +141,6 @@ impl F64x4 {
     pub fn lt(self, o: F64x4) -> Mask4 {
         Mask4(self.0.simd_lt(o.0))
     }
-    /// Lane k of `yes` where the mask holds, else of `no`.
-    #[inline(always)]
-    pub fn select(m: Mask4, yes: F64x4, no: F64x4) -> F64x4 {
-        F64x4(m.0.select(yes.0, no.0))
-    }
     #[inline(always)]
     pub fn min(self, o: F64x4) -> F64x4 {
         F64x4(self.0.fast_min(o.0))
@@ -172,10 +167,6 @@ impl Mask4 {
     pub fn and(self, x: F64x4) -> F64x4 {
         F64x4(self.0 & x.0)
     }
-    #[inline(always)]
-    pub fn holds(&self, k: usize) -> bool {
-        self.0.as_array()[k].to_bits() != 0
-    }
 }
 
 impl BitAnd for Mask4 {
@@ -191,11 +182,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_select_takes_each_lane_from_its_side() {
-        let (a, b) = (F64x4::new([1.0, 2.0, 3.0, 4.0]), F64x4::splat(0.0));
-        assert_eq!(F64x4::select(a.lt(F64x4::splat(2.5)), a, b).to_array(), [1.0, 2.0, 0.0, 0.0]);
+    fn a_mask_keeps_its_lanes_and_clears_the_rest_nan_included() {
+        let a = F64x4::new([1.0, 2.0, 3.0, f64::NAN]);
+        assert_eq!(a.lt(F64x4::splat(2.5)).and(a).to_array(), [1.0, 2.0, 0.0, 0.0]);
         let m = Mask4::new([true, false, true, true]) & a.lt(F64x4::splat(3.5));
-        assert_eq!((0..4).map(|k| m.holds(k)).collect::<Vec<_>>(), [true, false, true, false]);
+        assert_eq!(m.and(a).to_array(), [1.0, 0.0, 3.0, 0.0]);
     }
 
     #[test]
