@@ -13,6 +13,7 @@ pub mod neighbours;
 pub mod observables;
 pub mod predict;
 pub mod random;
+pub mod rigid;
 pub mod run;
 pub mod scene;
 pub mod solvers;
