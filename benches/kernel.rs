@@ -26,6 +26,7 @@ fn lattice(k: usize) -> (Vec<Body>, Vec<[f64; 3]>) {
             mass: 1.0,
             charge: if i % 2 == 0 { 1.0 } else { -1.0 },
             colour: [0.5, 0.3 - 0.1 * (i % 3) as f64],
+            moments: None,
         })
         .collect();
     let x = (0..n)
@@ -88,7 +89,7 @@ fn forces(c: &mut Criterion) {
             thermostat: None,
         };
         let graph = LagrangianGraph::new(&model);
-        let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n], chain: vec![] };
+        let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n], chain: vec![], spin: vec![] };
         let mut f = vec![[0.0; 3]; n];
         group.bench_function(BenchmarkId::new(kind.name(), n), |b| {
             b.iter(|| black_box(graph.forces(black_box(&s), &mut f).expect("no singularity")))
@@ -143,7 +144,7 @@ fn checker(c: &mut Criterion) {
     group.sample_size(10);
     for name in ["bench/lj_32k_checked.lagra", "kepler.lagra"] {
         let s = scene(name);
-        let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone(), chain: vec![] };
+        let state = State { step: 0, t: 0.0, x: s.x0.clone(), v: s.v0.clone(), chain: vec![], spin: vec![] };
         let opts = Options::plain(Some(100));
         let later = run(&s, opts).expect("the run").state;
         group.throughput(Throughput::Elements(s.x0.len() as u64));

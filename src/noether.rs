@@ -57,7 +57,7 @@ pub fn apply(scene: &mut Scene, path: &str, source: &str) -> (Analysis, Vec<Stri
 /// in the run, plus |L₀|₁; so that a tolerance relative to it means something even for a body
 /// that starts at the origin.
 fn charge_scales(scene: &Scene) -> [f64; 2] {
-    let s = Snapshot { step: 0, t: 0.0, x: &scene.x0, v: &scene.v0, chain: &[] };
+    let s = Snapshot { step: 0, t: 0.0, x: &scene.x0, v: &scene.v0, chain: &[], spin: &scene.spin0 };
     let q = Lifted::new(&scene.model, &s, &0.0);
     let norm1 = |v: &[f64; 3]| v.iter().map(|c| c.abs()).sum::<f64>();
     let largest = |a: &[[f64; 3]]| a.iter().map(norm1).fold(0.0, f64::max);

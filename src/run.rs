@@ -180,7 +180,11 @@ pub fn main(a: Args) -> ExitCode {
     let mut states = match a
         .states
         .as_ref()
-        .map(|p| File::create(p).and_then(|f| StateWriter::new(BufWriter::new(f), scene.x0.len(), scene.model.links())))
+        .map(|p| {
+            File::create(p).and_then(|f| {
+                StateWriter::new(BufWriter::new(f), scene.x0.len(), scene.model.links(), scene.spin0.len())
+            })
+        })
         .transpose()
     {
         Ok(w) => w,

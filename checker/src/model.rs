@@ -23,6 +23,11 @@ pub struct Body {
     /// Colour charge, a weight of SU(3)'s fundamental representation (zero: colourless).
     #[serde(default, skip_serializing_if = "colourless")]
     pub colour: [f64; 2],
+    /// A rigid body's principal moments of inertia about its centre of mass (its body frame is
+    /// the principal frame); none for a point mass. Its orientation and angular momentum are in
+    /// each state (`Snapshot::spin`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moments: Option<[f64; 3]>,
 }
 
 fn colourless(c: &[f64; 2]) -> bool {
@@ -137,6 +142,10 @@ pub struct Snapshot<'a> {
     pub v: &'a [[f64; 3]],
     /// The thermostat's links (η_j, ξ_j), empty without one.
     pub chain: &'a [[f64; 2]],
+    /// Each rigid body's spin, in body order: its orientation, a quaternion (w, x, y, z) from
+    /// the body frame to the world's, read as q/|q|, then its angular momentum π in the body
+    /// frame. Empty without rigid bodies.
+    pub spin: &'a [[f64; 7]],
 }
 
 impl Model {
@@ -156,6 +165,9 @@ impl Model {
             }
             if !b.charge.is_finite() || b.colour.iter().any(|c| !c.is_finite()) {
                 return Err(format!("body {i}: charge must be finite, got {}", b.charge));
+            }
+            if let Some(m) = b.moments.filter(|m| !m.iter().all(|c| c.is_finite() && *c > 0.0)) {
+                return Err(format!("body {i}: moments of inertia must be finite and positive, got {m:?}"));
             }
         }
         for (n, t) in self.terms.iter().enumerate() {
@@ -197,6 +209,11 @@ impl Model {
         self.thermostat.as_ref().map_or(0, |c| c.masses.len())
     }
 
+    /// The rigid bodies' moments, in body order: what each of a state's `spin` belongs to.
+    pub fn rigid(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        self.bodies.iter().filter_map(|b| b.moments)
+    }
+
     /// Rejects a state that does not fit the model or holds a non-finite number.
     pub fn check_state(&self, s: &Snapshot) -> Result<(), String> {
         let n = self.bodies.len();
@@ -216,6 +233,15 @@ impl Model {
         }
         if let Some(l) = s.chain.iter().find(|l| l.iter().any(|c| !c.is_finite())) {
             return Err(format!("step {}: a thermostat link is not finite ({l:?})", s.step));
+        }
+        if s.spin.len() != self.rigid().count() {
+            return Err(format!("state has {} spins for {} rigid bodies", s.spin.len(), self.rigid().count()));
+        }
+        if let Some(r) = s.spin.iter().find(|r| r.iter().any(|c| !c.is_finite()) || r[..4] == [0.0; 4]) {
+            return Err(format!(
+                "step {}: a rigid body's spin is not finite or its orientation is zero ({r:?})",
+                s.step
+            ));
         }
         Ok(())
     }

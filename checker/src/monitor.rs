@@ -63,6 +63,8 @@ struct Reference {
     t: f64,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
+    chain: Vec<[f64; 2]>,
+    spin: Vec<[f64; 7]>,
     measures: Vec<Vec<Outward>>,
 }
 
@@ -204,7 +206,14 @@ impl Monitor {
                     Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: Outward::point(0.0) });
             }
             let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model)).collect();
-            self.reference = Some(Reference { t: s.t, x: s.x.to_vec(), v: s.v.to_vec(), measures });
+            self.reference = Some(Reference {
+                t: s.t,
+                x: s.x.to_vec(),
+                v: s.v.to_vec(),
+                chain: s.chain.to_vec(),
+                spin: s.spin.to_vec(),
+                measures,
+            });
         } else if let Some(l) = &mut self.ledger {
             let power = q.dissipated_power(model);
             l.dissipated =
@@ -227,7 +236,7 @@ impl Monitor {
                     budget(t, s.step)
                 }
                 (None, _) => {
-                    t.scale = t.scale.max(weighted_speed(model, s, norm1));
+                    t.scale = t.scale.max(weighted_speed(model, s, norm1) + spun(s));
                     budget(t, s.step)
                 }
             };
@@ -269,7 +278,7 @@ impl Monitor {
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
 fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Outward, tol: f64) -> Mark {
-    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v, chain: &[] };
+    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v, chain: &r.chain, spin: &r.spin };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
         let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model);
@@ -364,6 +373,13 @@ fn weighted_speed(model: &Model, s: &Snapshot, w: impl Fn(&[f64; 3]) -> Outward)
     sum.bounds().1
 }
 
+/// Upper bound of Σ |π|₁ over the rigid bodies: the scale of the round-off a free rotation
+/// step puts into their angular momentum (a few u·|π| a step; measured ~0.1u for the spinning
+/// top, far under the budget's 16u).
+fn spun(s: &Snapshot) -> f64 {
+    s.spin.iter().fold(Outward::point(0.0), |sum, r| sum + norm1(&[r[4], r[5], r[6]])).bounds().1
+}
+
 /// The declared tolerance, or the round-off budget after `step` steps.
 fn budget(t: &Track, step: u64) -> f64 {
     t.claim.tol.unwrap_or(ROUNDOFF_BUDGET * step.max(1) as f64 * t.scale)
@@ -380,8 +396,8 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
             constraints: vec![],
@@ -396,7 +412,7 @@ mod tests {
     fn observe(m: &mut Monitor, step: u64, x1: f64, v0: f64) -> Result<(), Halt> {
         let x = [[0.0; 3], [x1, 0.0, 0.0]];
         let v = [[v0, 0.0, 0.0], [0.0; 3]];
-        m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] })
+        m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] })
     }
 
     #[test]
@@ -455,10 +471,10 @@ mod tests {
         let mut m = Monitor::new(damped, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
         let x = [[0.0; 3], [1.5, 0.0, 0.0]];
         let v0 = [[0.0; 3], [1.0, 0.0, 0.0]];
-        m.observe(&Snapshot { step: 0, t: 0.0, x: &x, v: &v0, chain: &[] }).unwrap();
+        m.observe(&Snapshot { step: 0, t: 0.0, x: &x, v: &v0, chain: &[], spin: &[] }).unwrap();
         // One time unit later the kinetic energy ½ has become exactly the dissipated ½.
         let v1 = [[0.0; 3], [0.0, 0.0, 0.0]];
-        let err = m.observe(&Snapshot { step: 1, t: 1.0, x: &x, v: &v1, chain: &[] });
+        let err = m.observe(&Snapshot { step: 1, t: 1.0, x: &x, v: &v1, chain: &[], spin: &[] });
         // The trapezoid saw power 1 then 0: Q = ½, so H + Q = H₀ holds exactly.
         assert_eq!(err, Ok(()));
         assert_eq!(m.finish().dissipators, [Kind::HarmonicBond]);
@@ -470,7 +486,7 @@ mod tests {
         let model = Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] }],
+            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
             constraints: vec![],
             thermostat: None,
@@ -483,13 +499,17 @@ mod tests {
         let (model, x, v) = cancelling();
         let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-12), 1)], 1).unwrap();
         for step in 0..=1 {
-            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] }).unwrap();
         }
         let out = m.finish();
         let Verdict::Pass(p) = &out.verdicts[0] else { panic!("{:?}", out.verdicts[0]) };
         assert_eq!(p.precision(), 128);
         // and binary64 intervals alone really could not: their enclosure straddles 1e-12
-        let q = Lifted::new(&cancelling().0, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] }, &Outward::NAN);
+        let q = Lifted::new(
+            &cancelling().0,
+            &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] },
+            &Outward::NAN,
+        );
         let h = q.energy(&cancelling().0);
         let energy = claim(ClaimKind::EnergyConservation, Some(1e-12), 1);
         let (lo, hi) = deviation(&energy, vec![h], vec![h], Outward::point(0.0)).bounds();
@@ -503,7 +523,7 @@ mod tests {
         let (x, v) = ([[1.0, 2.0, 3.0]], [[0.0; 3]]);
         let mut m = Monitor::new(model, vec![claim(ClaimKind::EnergyConservation, Some(1e-3), 1)], 1).unwrap();
         for step in 0..=1 {
-            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
+            m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] }).unwrap();
         }
         let out = m.finish();
         assert!(matches!(out.verdicts[0], Verdict::Undecided(Breach { precision: 1024, .. })), "{:?}", out.verdicts[0]);
@@ -539,7 +559,7 @@ mod tests {
                 let mut seen = vec![];
                 while step <= last {
                     let (x, v) = state(step);
-                    let verdict = m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] });
+                    let verdict = m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] });
                     seen.push(step);
                     if verdict.is_err() {
                         break;

@@ -6,7 +6,7 @@ use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
 use crate::mpfi::Mpfi;
 use crate::outward::lanes::{Lanes, WIDTH};
 use crate::outward::Outward;
-use crate::real::{norm2, sub3, Real, Vec3};
+use crate::real::{cross3, dot3, norm2, sub3, Real, Vec3};
 use crate::terms::{Kind, Shape, Site};
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -16,6 +16,8 @@ pub struct Lifted<R> {
     sites: Vec<Site<R>>,
     /// A thermostat chain's links (η, ξ).
     links: Vec<[R; 2]>,
+    /// Each rigid body's spin: orientation q, body-frame angular momentum π, principal moments.
+    spins: Vec<Spin<R>>,
     params: Vec<Vec<R>>,
     zero: R,
     /// The exact positions, to choose periodic images from.
@@ -49,6 +51,15 @@ impl<R: PairSum> Lifted<R> {
         Lifted {
             sites,
             links: s.chain.iter().map(|l| l.map(|c| proto.lift(c))).collect(),
+            spins: model
+                .rigid()
+                .zip(s.spin)
+                .map(|(i, s)| Spin {
+                    q: std::array::from_fn(|k| proto.lift(s[k])),
+                    pi: std::array::from_fn(|k| proto.lift(s[4 + k])),
+                    moments: i.map(|c| proto.lift(c)),
+                })
+                .collect(),
             params,
             zero: proto.lift(0.0),
             x: s.x.to_vec(),
@@ -145,9 +156,13 @@ impl<R: PairSum> Lifted<R> {
         }
     }
 
+    /// ½ Σ m |v|², and each rigid body's ½ Σ π_k² / I_k.
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
-        self.sites.iter().fold(self.zero.clone(), |acc, s| acc + half.clone() * s.m.clone() * norm2(&s.v))
+        let moving = self.sites.iter().fold(self.zero.clone(), |acc, s| acc + half.clone() * s.m.clone() * norm2(&s.v));
+        self.spins.iter().fold(moving, |acc, s| {
+            (0..3).fold(acc, |acc, k| acc + half.clone() * s.pi[k].clone().powi(2) / s.moments[k].clone())
+        })
     }
 
     pub fn potential(&self, model: &Model) -> R {
@@ -208,7 +223,11 @@ impl<R: PairSum> Lifted<R> {
                 acc + s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
             })
         });
-        self.with_shares(model, free, 1)
+        let spun = self.spins.iter().fold(free, |acc, s| {
+            let l = s.world();
+            std::array::from_fn(|c| acc[c].clone() + l[c].clone())
+        });
+        self.with_shares(model, spun, 1)
     }
 
     /// `charge` plus share `which` (0 momentum, 1 angular momentum) of every instance of a kind
@@ -220,6 +239,33 @@ impl<R: PairSum> Lifted<R> {
             model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone())
         };
         self.sum(model, |t| t.kind.has_charge_share(), (charge, zero, add), term, self.one_by_one(&term, add))
+    }
+}
+
+/// A rigid body's spin lifted into `R`.
+struct Spin<R> {
+    q: [R; 4],
+    pi: Vec3<R>,
+    moments: Vec3<R>,
+}
+
+impl<R: Real> Spin<R> {
+    /// The angular momentum about the centre of mass in the world frame: π turned by q/|q|,
+    /// ((w² − u·u) π + 2(u·π) u + 2w (u × π)) / |q|² with q = (w, u) — the rotation a unit
+    /// quaternion gives, divided by |q|² so that a q rounded off the unit sphere still turns
+    /// without stretching.
+    fn world(&self) -> Vec3<R> {
+        let (w, u) = (self.q[0].clone(), [self.q[1].clone(), self.q[2].clone(), self.q[3].clone()]);
+        let uu = norm2(&u);
+        let (two, along) = (w.lift(2.0), dot3(&u, &self.pi));
+        let across = cross3(&u, &self.pi);
+        let n2 = w.clone().powi(2) + uu.clone();
+        std::array::from_fn(|c| {
+            ((w.clone().powi(2) - uu.clone()) * self.pi[c].clone()
+                + two.clone() * along.clone() * u[c].clone()
+                + two.clone() * w.clone() * across[c].clone())
+                / n2.clone()
+        })
     }
 }
 
@@ -340,9 +386,9 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 1.0, colour: [0.0; 2] },
-                Body { mass: 2.5, charge: -0.5, colour: [0.0; 2] },
-                Body { mass: 0.5, charge: 2.0, colour: [0.0; 2] },
+                Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None },
+                Body { mass: 2.5, charge: -0.5, colour: [0.0; 2], moments: None },
+                Body { mass: 0.5, charge: 2.0, colour: [0.0; 2], moments: None },
             ],
             terms: vec![
                 TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![k, r0, gamma] },
@@ -355,6 +401,58 @@ mod tests {
         }
     }
 
+    /// One rigid body of moments (1, 2, 4) at rest at the origin.
+    fn brick() -> Model {
+        let body = Body { mass: 3.0, charge: 0.0, colour: [0.0; 2], moments: Some([1.0, 2.0, 4.0]) };
+        Model {
+            units: UnitSystem::Reduced,
+            cell: None,
+            bodies: vec![body],
+            terms: vec![],
+            constraints: vec![],
+            thermostat: None,
+        }
+    }
+
+    proptest! {
+        /// A rigid body's kinetic energy is ½ Σ π_k²/I_k and its angular momentum π turned by
+        /// q/|q| (against nalgebra's rotation, and whatever |q| is), each enclosed.
+        #[test]
+        fn a_spin_has_its_energy_and_angular_momentum(
+            axis in prop::array::uniform3(-1.0f64..1.0), angle in -3.0f64..3.0, pi in coord(), stretch in 0.5f64..2.0,
+        ) {
+            use nalgebra::{Unit, UnitQuaternion, Vector3};
+            let axis = Unit::try_new(Vector3::from(axis), 1e-3);
+            prop_assume!(axis.is_some());
+            let q = UnitQuaternion::from_axis_angle(&axis.unwrap(), angle).into_inner() * stretch;
+            let spin = [[q.w, q.i, q.j, q.k, pi[0], pi[1], pi[2]]];
+            let m = brick();
+            let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &[[0.0; 3]], v: &[[0.0; 3]], chain: &[], spin: &spin }, &Outward::NAN);
+            let kinetic = 0.5 * (pi[0] * pi[0] + pi[1] * pi[1] / 2.0 + pi[2] * pi[2] / 4.0);
+            let (lo, hi) = e.kinetic().bounds();
+            prop_assert!(lo <= kinetic * (1.0 + 1e-15) && kinetic * (1.0 - 1e-15) <= hi && hi - lo < 1e-13 * (1.0 + kinetic));
+            let l = UnitQuaternion::new_normalize(q) * Vector3::from(pi);
+            for (c, lc) in e.angular_momentum(&m).iter().zip(l.iter()) {
+                let (lo, hi) = c.bounds();
+                prop_assert!(lo - 1e-13 <= *lc && *lc <= hi + 1e-13 && hi - lo < 1e-12, "{lo} {hi} {lc}");
+            }
+        }
+    }
+
+    /// A state whose spins do not fit the model is refused, as a zero orientation is.
+    #[test]
+    fn spins_must_fit_the_model() {
+        let m = brick();
+        let state = |spin: &[[f64; 7]]| {
+            m.check_state(&Snapshot { step: 0, t: 0.0, x: &[[0.0; 3]], v: &[[0.0; 3]], chain: &[], spin })
+                .map_err(|e| e.to_string())
+        };
+        assert!(state(&[[1.0, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0]]).is_ok());
+        assert_eq!(state(&[]).unwrap_err(), "state has 0 spins for 1 rigid bodies");
+        assert!(state(&[[0.0; 7]]).unwrap_err().contains("orientation is zero"));
+        assert!(state(&[[1.0, 0.0, 0.0, f64::NAN, 1.0, 2.0, 3.0]]).unwrap_err().contains("not finite"));
+    }
+
     fn coord() -> impl Strategy<Value = [f64; 3]> {
         prop::array::uniform3(-10.0f64..10.0)
     }
@@ -365,7 +463,7 @@ mod tests {
         fn interval_encloses_mpfr(x in prop::array::uniform3(coord()), v in prop::array::uniform3(coord()),
                                   k in 0.1f64..100.0, r0 in 0.0f64..3.0, gamma in 0.0f64..2.0, g in 0.0f64..20.0) {
             let m = model(k, r0, gamma, g);
-            let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
+            let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
             let iv = Lifted::new(&m, &s, &Outward::NAN);
             let hp = Lifted::new(&m, &s, &Float::new(256));
             let inside = |i: Outward, f: Float| {
@@ -396,7 +494,7 @@ mod tests {
 
     /// 2,197 LJ atoms in a periodic box: ~50,000 pairs, a dozen chunks.
     fn liquid() -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] };
+        let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None };
         let model = Model {
             units: UnitSystem::Reduced,
             cell: Some(Cell { size: [14.3; 3], periodic: [true; 3] }),
@@ -416,7 +514,7 @@ mod tests {
     #[test]
     fn pair_sums_are_the_same_bits_on_any_thread_count() {
         let (m, x, v) = liquid();
-        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
         let on = |n| Lifted::new(&m, &s, &Outward::NAN).on_threads(n).energy(&m);
         let one = on(1);
         assert!(x.len() > 4 * CHUNK, "several chunks");
@@ -435,7 +533,7 @@ mod tests {
     #[test]
     fn pairs_in_lanes_add_up_to_the_same_bits() {
         let (m, x, v) = liquid();
-        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] }, &Outward::NAN);
+        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] }, &Outward::NAN);
         let (t, p) = (&m.terms[0], &q.params[0]);
         let pairs = crate::broad_phase::within(&x, &m.cell, asked_reach(t));
         let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
@@ -454,10 +552,11 @@ mod tests {
         let (m, x, v) = liquid();
         let earlier: Vec<[f64; 3]> =
             x.iter().zip(&v).map(|(p, u)| std::array::from_fn(|a| p[a] - 0.5 * u[a])).collect();
-        let ahead: Arc<[Foreseen]> = foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[] }).into();
+        let ahead: Arc<[Foreseen]> =
+            foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[], spin: &[] }).into();
         assert_eq!(ahead.len(), 1);
         let bits = |x: &[[f64; 3]], ahead: Arc<[Foreseen]>| {
-            let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[] }, &Outward::NAN)
+            let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[], spin: &[] }, &Outward::NAN)
                 .foreseeing(ahead)
                 .energy(&m);
             (e.bounds().0.to_bits(), e.bounds().1.to_bits())
@@ -473,7 +572,7 @@ mod tests {
         let m = model(2.0, 2.0, 0.0, 0.0);
         let x = [[-1.35, 0.0, 0.0], [1.35, 0.0, 0.0], [0.0, 100.0, 0.0]];
         let v = [[0.0; 3]; 3];
-        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
         let l = Lifted::new(&Model { terms: m.terms[..1].to_vec(), ..m.clone() }, &s, &0.0f64);
         assert!((l.potential(&Model { terms: m.terms[..1].to_vec(), ..m }) - 0.49).abs() < 1e-15);
     }

@@ -49,6 +49,9 @@ fn replay(c: &Certificate, s: &States) -> Result<(Vec<Verdict>, Vec<Trail>), Str
     if s.bodies != c.model.bodies.len() {
         return Err(format!("the state file has {} bodies, the model {}", s.bodies, c.model.bodies.len()));
     }
+    if s.spins != c.model.rigid().count() {
+        return Err(format!("the state file has {} rigid bodies, the model {}", s.spins, c.model.rigid().count()));
+    }
     if s.links != c.model.links() {
         return Err(format!("the state file has {} thermostat links, the model {}", s.links, c.model.links()));
     }

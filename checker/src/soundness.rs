@@ -84,9 +84,9 @@ fn model() -> Model {
         units: UnitSystem::Reduced,
         cell: None,
         bodies: vec![
-            Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
-            Body { mass: 2.0, charge: 0.0, colour: [0.0; 2] },
-            Body { mass: 0.5, charge: 0.0, colour: [0.0; 2] },
+            Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
+            Body { mass: 2.0, charge: 0.0, colour: [0.0; 2], moments: None },
+            Body { mass: 0.5, charge: 0.0, colour: [0.0; 2], moments: None },
         ],
         terms: vec![
             TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![3.0, 1.0, 0.0] },
@@ -117,7 +117,7 @@ proptest! {
     ) {
         let m = model();
         let x1: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|c| x0[i][c] + nudge[i][c]));
-        let (a, b) = (Snapshot { step: 0, t: 0.0, x: &x0, v: &v0, chain: &[] }, Snapshot { step: 1, t: 1.0, x: &x1, v: &v0, chain: &[] });
+        let (a, b) = (Snapshot { step: 0, t: 0.0, x: &x0, v: &v0, chain: &[], spin: &[] }, Snapshot { step: 1, t: 1.0, x: &x1, v: &v0, chain: &[], spin: &[] });
         let exact = drift(&m, &a, &b);
         // a tolerance around the true drift, where the decision is hardest
         let tol = exact.to_f64() * scale;
@@ -144,7 +144,7 @@ fn certificate() -> String {
     let x = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.0, 0.0]];
     let v = [[0.0; 3]; 3];
     for step in 0..=1 {
-        mon.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[] }).unwrap();
+        mon.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] }).unwrap();
     }
     let out = mon.finish();
     Certificate {

@@ -296,7 +296,9 @@ mod tests {
         Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: (0..n).map(|i| Body { mass: 1.0 + i as f64, charge: 0.0, colour: [0.0; 2] }).collect(),
+            bodies: (0..n)
+                .map(|i| Body { mass: 1.0 + i as f64, charge: 0.0, colour: [0.0; 2], moments: None })
+                .collect(),
             terms: vec![],
             constraints: (1..n).map(|i| Constraint { bodies: [i - 1, i], length: 1.0 }).collect(),
             thermostat: None,

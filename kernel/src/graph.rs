@@ -9,11 +9,13 @@
 use crate::constraints::{Constraints, Swept, Tolerance, Unconverged};
 use crate::forces::derivative::{Adjoint, Direction, Wanted};
 use crate::forces::{group, Force, Frame, Kept, Parts, Pool, Singularity};
+use crate::rigid::{self, Spin};
 use crate::state::State;
 use crate::step::{self, Stride};
 use crate::sum::Sum;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Kind;
+use nalgebra::Vector3;
 use std::sync::Arc;
 
 pub struct LagrangianGraph {
@@ -26,6 +28,8 @@ pub struct LagrangianGraph {
     colours: Vec<[f64; 2]>,
     groups: Vec<(Kind, Box<dyn Force>)>,
     constraints: Option<Constraints>,
+    /// The rigid bodies' principal moments, in body order (what `State::spin` holds).
+    moments: Vec<Vector3<f64>>,
 }
 
 /// Which forces an evaluation adds up.
@@ -72,7 +76,8 @@ impl LagrangianGraph {
         let velocity_dependent = groups.iter().any(|g| g.1.velocity_dependent());
         let colours = model.bodies.iter().map(|b| b.colour).collect();
         let constraints = Constraints::of(model);
-        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups, constraints }
+        let moments = model.rigid().map(Vector3::from).collect();
+        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups, constraints, moments }
     }
 
     /// The kinds present, in dispatch order.
@@ -129,6 +134,15 @@ impl LagrangianGraph {
     /// v += h·F/m.
     pub fn kick(&self, v: &mut [[f64; 3]], f: &[[f64; 3]], h: f64) {
         step::kick(v, f, &self.inverse_masses, h);
+    }
+
+    /// The rigid bodies turn freely for `steps` steps of `h` (`rigid::free_step`): no term
+    /// exerts a torque, so their rotation commutes with the rest of a step and is composed after
+    /// it, the same bits whenever it runs.
+    pub fn turn(&self, spin: &mut [Spin], h: f64, steps: u64) {
+        for (s, &m) in spin.iter_mut().zip(&self.moments) {
+            (0..steps).for_each(|_| rigid::free_step(s, m, h));
+        }
     }
 
     /// x += h·v.

@@ -33,7 +33,14 @@ impl Scene {
     /// The state the run starts from: step 0, the initial positions and velocities, a
     /// thermostat chain at rest.
     pub fn start(&self) -> State {
-        State { step: 0, t: 0.0, x: self.x0.clone(), v: self.v0.clone(), chain: vec![[0.0; 2]; self.model.links()] }
+        State {
+            step: 0,
+            t: 0.0,
+            x: self.x0.clone(),
+            v: self.v0.clone(),
+            chain: vec![[0.0; 2]; self.model.links()],
+            spin: self.spin0.clone(),
+        }
     }
 
     /// The temperature the scene's thermostat holds, if it has one.
@@ -64,6 +71,8 @@ pub struct Scene {
     pub model: Model,
     pub x0: Vec<[f64; 3]>,
     pub v0: Vec<[f64; 3]>,
+    /// Each rigid body's initial orientation and angular momentum (`State::spin`).
+    pub spin0: Vec<[f64; 7]>,
     /// Display size of each body (from `size` or its type); not part of the physics.
     pub sizes: Vec<f64>,
     pub claims: Vec<Claim>,

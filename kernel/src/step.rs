@@ -108,7 +108,7 @@ mod tests {
 
     #[test]
     fn the_clock_is_the_step_times_dt() {
-        let mut s = State { step: 0, t: 0.0, x: vec![], v: vec![], chain: vec![] };
+        let mut s = State { step: 0, t: 0.0, x: vec![], v: vec![], chain: vec![], spin: vec![] };
         for _ in 0..10 {
             tick(&mut s, 0.1);
         }

@@ -158,6 +158,7 @@ impl Recorded {
                 x: vecs(&self.x, k),
                 v: vecs(&self.v, k),
                 chain: vec![],
+                spin: vec![],
             };
             to.frame(&s, self.energies[k])?;
         }
@@ -176,6 +177,7 @@ mod tests {
             x: vec![[0.1, -2.5, 1e-300], [3.0, 4.0, 5.0]],
             v: vec![[1.0, 0.0, -1.0], [0.5, 0.25, 0.125]],
             chain: vec![],
+            spin: vec![],
         }
     }
 

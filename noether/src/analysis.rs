@@ -186,7 +186,7 @@ mod tests {
     use lagra_checker::model::{Body, Cell, UnitSystem};
 
     fn model(terms: Vec<TermInstance>, cell: Option<Cell>) -> Model {
-        let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2] }; 3];
+        let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None }; 3];
         Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![], thermostat: None }
     }
 

@@ -423,7 +423,12 @@ mod tests {
             })
             .collect();
         let bodies = (0..n)
-            .map(|_| Body { mass: rng.uniform(0.5, 2.0), charge: rng.uniform(-1.0, 1.0), colour: [0.0; 2] })
+            .map(|_| Body {
+                mass: rng.uniform(0.5, 2.0),
+                charge: rng.uniform(-1.0, 1.0),
+                colour: [0.0; 2],
+                moments: None,
+            })
             .collect();
         let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
         let terms = vec![TermInstance { kind, sites, params }];

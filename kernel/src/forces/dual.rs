@@ -116,8 +116,12 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
     let term = TermInstance { kind, sites, params: params.to_vec() };
     let q: Vec<f64> = (0..n).map(|_| rng.uniform(-2.0, 2.0)).collect();
     let colour: Vec<[f64; 2]> = (0..n).map(|_| [rng.uniform(-0.5, 0.5), rng.uniform(-0.6, 0.6)]).collect();
-    let bodies =
-        m.iter().zip(&q).zip(&colour).map(|((&mass, &charge), &colour)| Body { mass, charge, colour }).collect();
+    let bodies = m
+        .iter()
+        .zip(&q)
+        .zip(&colour)
+        .map(|((&mass, &charge), &colour)| Body { mass, charge, colour, moments: None })
+        .collect();
     let model = Model {
         units: UnitSystem::Reduced,
         cell: None,

@@ -288,8 +288,9 @@ mod tests {
             .flat_map(|p| std::iter::repeat_n(if p.name == "R0" { 3.0 } else { 1.0 }, p.len))
             .collect();
         let n = spec.shape.arity().max(2);
-        let bodies =
-            (0..n).map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64] }).collect();
+        let bodies = (0..n)
+            .map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64], moments: None })
+            .collect();
         let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
         let terms = vec![TermInstance { kind, sites, params }];
         (Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![], thermostat: None }, n)

@@ -78,9 +78,14 @@ pub struct Reader {
 }
 
 impl Reader {
-    /// `len` numbers (1, or 3 for a vector) of dimension `dim`, in the scene's units.
+    /// `len` numbers (1, or 3 for a vector, 4 for a quaternion) of dimension `dim`, in the
+    /// scene's units.
     pub fn numbers(&self, f: &Field, owner: &str, dim: Dim, len: usize) -> Result<Vec<f64>, Diagnostic> {
-        let what = if len == 1 { "a number" } else { "a vector [x, y, z]" };
+        let what = match len {
+            1 => "a number",
+            3 => "a vector [x, y, z]",
+            _ => "a quaternion [w, x, y, z]",
+        };
         let q = f.value.clone().into_inner().next().expect("a value has one child");
         if q.as_rule() != Rule::quantity {
             return Err(Diagnostic::new(
@@ -94,7 +99,7 @@ impl Reader {
             Rule::vector => body.clone().into_inner().collect(),
             _ => vec![body.clone()],
         };
-        if (body.as_rule() == Rule::vector) != (len == 3) || nums.len() != len {
+        if (body.as_rule() == Rule::vector) != (len > 1) || nums.len() != len {
             return Err(Diagnostic::new(body.as_span().into(), format!("{owner}.{} expects {what}", f.name)));
         }
         let mut convert = None;

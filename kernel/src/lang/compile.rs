@@ -4,6 +4,7 @@
 use super::block::{flags, typed, value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
 use super::lattice::{self, Draw, Packing};
+use super::shape;
 use super::{Pair, Rule};
 use crate::constraints::{Constraints, Tolerance};
 use crate::predict::{Prediction, PredictionKind};
@@ -20,7 +21,8 @@ use std::collections::HashMap;
 /// Types every scene knows without declaring them: display sizes only.
 const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
 const LATTICE_FIELDS: &[&str] = &["type", "kind", "density", "cells", "temperature", "seed", "velocities"];
-const ENTITY_FIELDS: &[&str] = &["type", "position", "velocity", "mass", "charge", "colour", "size"];
+const ENTITY_FIELDS: &[&str] =
+    &["type", "position", "velocity", "mass", "charge", "colour", "size", "shape", "orientation", "angular_velocity"];
 
 /// The colour charges, weights of SU(3)'s fundamental representation (|c|² = 1/3), and the
 /// antiquarks' negatives.
@@ -62,6 +64,7 @@ struct Compiler<'a> {
     bodies: Vec<Body>,
     x0: Vec<[f64; 3]>,
     v0: Vec<[f64; 3]>,
+    spin0: Vec<[f64; 7]>,
     sizes: Vec<f64>,
     terms: Vec<TermInstance>,
     /// Where each bond's indices were written, checked once all entities are known.
@@ -109,6 +112,7 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         bodies: vec![],
         x0: vec![],
         v0: vec![],
+        spin0: vec![],
         sizes: vec![],
         terms: vec![],
         indices: vec![],
@@ -283,6 +287,8 @@ impl<'a> Compiler<'a> {
         let (template, size) = self.entity_type(&mut b, "entity")?;
         b.check_names("entity", ENTITY_FIELDS)?;
         let at = b.span;
+        // a rigid body's size is its shape's, read with it (`shape::rigid`)
+        let shaped = b.get("shape").is_some() || template.is_some_and(|t| t.get("shape").is_some());
         let mut field = |name: &str| b.take(name).or_else(|| template.and_then(|t| t.get(name).cloned()));
         let vec3 = |v: Vec<f64>| [v[0], v[1], v[2]];
         let position = field("position").ok_or_else(|| Diagnostic::new(at, "entity needs a position"))?;
@@ -291,7 +297,13 @@ impl<'a> Compiler<'a> {
             Some(f) => vec3(self.rd.numbers(&f, "entity", Dim::VELOCITY, 3)?),
             None => [0.0; 3],
         };
-        let (body, size) = self.body(&mut field, at, size)?;
+        let (mut body, mut size) =
+            self.body(&mut |name| if shaped && name == "size" { None } else { field(name) }, at, size)?;
+        if let Some(r) = shape::rigid(&self.rd, &mut field, body.mass)? {
+            body.moments = Some(r.moments);
+            self.spin0.push(r.spin);
+            size = r.size;
+        }
         self.bodies.push(body);
         self.x0.push(x);
         self.v0.push(v);
@@ -347,7 +359,7 @@ impl<'a> Compiler<'a> {
             Some(f) => self.rd.positive(&f, "entity", Dim::LENGTH)?,
             None => size.unwrap_or(0.0),
         };
-        Ok((Body { mass, charge, colour }, size))
+        Ok((Body { mass, charge, colour, moments: None }, size))
     }
 
     /// `lattice { type, kind: fcc, density, cells: [nx, ny, nz], temperature, seed, velocities }`:
@@ -366,6 +378,9 @@ impl<'a> Compiler<'a> {
         let (template, size) = self.entity_type(&mut b, "lattice")?;
         let template =
             template.ok_or_else(|| Diagnostic::new(at, "lattice needs `type:` an entity type declared with a mass"))?;
+        if let Some(f) = template.get("shape") {
+            return err(f.span, "a lattice's bodies are point masses: its entity type cannot have a shape");
+        }
         let kind = match b.take("kind") {
             None => Packing::Fcc,
             Some(f) => {
@@ -803,6 +818,7 @@ impl<'a> Compiler<'a> {
             model,
             x0: self.x0,
             v0: self.v0,
+            spin0: self.spin0,
             sizes: self.sizes,
             claims: self.claims,
             claim_spans: self.claim_spans,

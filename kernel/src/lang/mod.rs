@@ -4,6 +4,7 @@ mod block;
 mod compile;
 mod diagnostic;
 mod lattice;
+mod shape;
 mod syntax;
 mod units;
 

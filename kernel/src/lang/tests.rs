@@ -530,3 +530,67 @@ fn sampling_settings_are_checked() {
     let s = compile(&GOOD.replace("steps: 10", "steps: 10, equilibrate: 0.05, sample_every: 2")).unwrap();
     assert_eq!(s.sampling.map(|s| (s.equilibrate, s.every)), Some((0.05, 2)));
 }
+
+const BRICK: &str = r#"scene s {
+  entity { shape: box, size: [1, 2, 3], mass: 12, position: [0, 0, 0], orientation: { axis: [0, 0, 1], angle: 90 deg }, angular_velocity: [0, 2, 0] }
+  solver { dt: 0.01, steps: 10 }
+}"#;
+
+/// A shaped entity is a rigid body: its moments from shape and mass, its spin from its
+/// orientation and angular velocity (turned into the body frame).
+#[test]
+fn a_shaped_entity_is_a_rigid_body() {
+    let s = compile(BRICK).unwrap();
+    assert_eq!(s.model.bodies[0].moments, Some([13.0, 10.0, 5.0]));
+    let spin = s.spin0[0];
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    assert!((spin[0] - half).abs() < 1e-15 && (spin[3] - half).abs() < 1e-15, "{spin:?}");
+    // a body turned 90° about z has its x axis along the world's y: ω = 2ŷ is 2x̂ in the body,
+    // π = I ω = (26, 0, 0)
+    assert!((spin[4] - 26.0).abs() < 1e-13 && spin[5].abs() < 1e-13 && spin[6] == 0.0, "{spin:?}");
+    assert_eq!(s.sizes[0], 1.5);
+    let ball = compile(&BRICK.replacen("shape: box, size: [1, 2, 3]", "shape: sphere, size: 0.5", 1)).unwrap();
+    assert!(ball.model.bodies[0].moments.unwrap().iter().all(|m| (m - 1.2).abs() < 1e-15)); // ⅖·12·0.5²
+    let quaternion = BRICK.replacen("{ axis: [0, 0, 1], angle: 90 deg }", "[1, 0, 0, 0]", 1);
+    assert_eq!(compile(&quaternion).unwrap().spin0[0][..4], [1.0, 0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn rigid_bodies_reject_bad_shapes_and_orientations() {
+    let e = |from: &str, to: &str| error_in(BRICK, from, to);
+    assert_eq!(
+        e("size: [1, 2, 3]", "size: [1, 0, 3]"),
+        at(2, 30, "entity.size: a box's edge length must be positive and finite, not 0")
+    );
+    assert_eq!(e("size: [1, 2, 3]", "size: 2"), at(2, 30, "entity.size expects a vector [x, y, z]"));
+    assert_eq!(e("shape: box", "shape: cone"), at(2, 19, "unknown shape `cone`; known: box, sphere"));
+    assert_eq!(
+        e("size: [1, 2, 3], ", ""),
+        at(2, 19, "a rigid body needs a size: `size: [a, b, c]` for a box, `size: r` for a sphere")
+    );
+    assert_eq!(
+        e("{ axis: [0, 0, 1], angle: 90 deg }", "[1, 0, 0, 0.1]"),
+        at(2, 85, "entity.orientation [w, x, y, z] must be a unit quaternion (its norm is 1.004987562112089); or write { axis: [x, y, z], angle: θ }")
+    );
+    assert_eq!(e("axis: [0, 0, 1]", "axis: [0, 0, 0]"), at(2, 93, "orientation.axis must not be zero"));
+    assert_eq!(e(", angle: 90 deg", ""), at(2, 85, "orientation needs an `angle`"));
+    assert_eq!(
+        e("angular_velocity: [0, 2, 0]", "angular_velocity: [0, 2, 0] m/s"),
+        at(2, 149, "entity.angular_velocity expects T⁻¹, found L·T⁻¹ (velocity)")
+    );
+    assert_eq!(
+        e("shape: box, size: [1, 2, 3], ", ""),
+        at(2, 43, "entity.orientation needs a `shape` (box or sphere): a point mass has no orientation")
+    );
+    assert_eq!(e("mass: 12", "mass: 0"), at(2, 47, "entity.mass must be positive, got 0"));
+}
+
+#[test]
+fn a_lattice_of_rigid_bodies_is_refused() {
+    let src = "scene s {\n  entity brick { mass: 1, shape: box, size: [1, 1, 1] }\n  lattice { type: brick, density: 0.8, cells: [2, 2, 2], temperature: 1, seed: 1 }\n  solver { dt: 0.01, steps: 1 }\n}";
+    let d = compile(src).unwrap_err();
+    assert_eq!(
+        (d.line_col(src), d.message.as_str()),
+        ((2, 27), "a lattice's bodies are point masses: its entity type cannot have a shape")
+    );
+}

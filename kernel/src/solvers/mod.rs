@@ -327,7 +327,11 @@ impl Stepper {
     /// nothing else runs between them. A failure is an error at the step it arises (the state's
     /// counter is then at the step before); the potential energy is that of the state reached.
     pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Failure> {
-        self.solver.advance_to(g, s, dt, until)
+        let from = s.step;
+        let done = self.solver.advance_to(g, s, dt, until);
+        // the rigid bodies turn through the steps taken, failed or not (`LagrangianGraph::turn`)
+        g.turn(&mut s.spin, dt, s.step - from);
+        done
     }
 
     /// The forces at the current state.

@@ -15,7 +15,7 @@ pub struct Rk4 {
 /// x + h·dx and v + h·dv, as a state for a force evaluation.
 fn shifted(s: &State, dx: &Vecs, dv: &Vecs, h: f64) -> State {
     let add = |a: &Vecs, b: &Vecs| a.iter().zip(b).map(|(a, b)| std::array::from_fn(|c| a[c] + h * b[c])).collect();
-    State { step: s.step, t: s.t, x: add(&s.x, dx), v: add(&s.v, dv), chain: vec![] }
+    State { step: s.step, t: s.t, x: add(&s.x, dx), v: add(&s.v, dv), chain: vec![], spin: vec![] }
 }
 
 /// Accelerations at a state.

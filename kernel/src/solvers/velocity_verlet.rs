@@ -76,8 +76,8 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2] },
-                Body { mass: 3.0, charge: 0.0, colour: [0.0; 2] },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
+                Body { mass: 3.0, charge: 0.0, colour: [0.0; 2], moments: None },
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
             constraints: vec![],
@@ -89,6 +89,7 @@ mod tests {
             x: vec![[0.0; 3], [1.7, 0.2, 0.0]],
             v: vec![[0.1, 0.3, 0.0], [-0.2, 0.0, 0.4]],
             chain: vec![],
+            spin: vec![],
         };
         (LagrangianGraph::new(&model), s)
     }

@@ -150,7 +150,7 @@ fn charges_agree_with_the_checker(t: &Table, path: &Path) {
     for f in frames {
         let vec3 = |k: &str| -> Vec<[f64; 3]> { serde_json::from_value(f[k].clone()).unwrap() };
         let (x, v) = (vec3("x"), vec3("v"));
-        let snap = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[] };
+        let snap = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
         let q = Lifted::new(&scene.model, &snap, &0.0);
         let checker = [q.momentum(&scene.model), q.angular_momentum(&scene.model)];
         for (which, name) in symbols.iter().enumerate() {

@@ -1,0 +1,100 @@
+//! An entity with a `shape` is a rigid body: `shape: box, size: [a, b, c]` (edge lengths) or
+//! `shape: sphere, size: r`, with `orientation: { axis: [x, y, z], angle: 30 deg }` (or a unit
+//! quaternion `[w, x, y, z]`) and `angular_velocity: [x, y, z]` (world frame, 1/time). Its
+//! moments of inertia come from its shape and mass.
+
+use super::block::{value_span, word, Block, Field, Reader};
+use super::diagnostic::{Diagnostic, Span};
+use super::Rule;
+use crate::rigid::{spin_of, Shape, Spin};
+use lagra_checker::units::Dim;
+use nalgebra::{Quaternion, Unit, UnitQuaternion, Vector3};
+
+/// The fields only a rigid body has.
+pub const RIGID_FIELDS: &[&str] = &["shape", "orientation", "angular_velocity"];
+
+/// How far from 1 a quaternion's norm may be: it is then normalised; farther is an error (a
+/// typo is likelier than a scaled rotation).
+const UNIT: f64 = 1e-9;
+
+/// A rigid body read from an entity's fields.
+pub struct Rigid {
+    pub moments: [f64; 3],
+    pub spin: Spin,
+    /// Its largest half-extent, for display.
+    pub size: f64,
+}
+
+/// The rigid body an entity's fields describe, if it has a `shape`.
+pub fn rigid<'a>(
+    rd: &Reader,
+    field: &mut impl FnMut(&str) -> Option<Field<'a>>,
+    mass: f64,
+) -> Result<Option<Rigid>, Diagnostic> {
+    let Some(shape_field) = field("shape") else {
+        for name in &RIGID_FIELDS[1..] {
+            if let Some(f) = field(name) {
+                return Err(Diagnostic::new(
+                    f.span,
+                    format!("entity.{name} needs a `shape` (box or sphere): a point mass has no orientation"),
+                ));
+            }
+        }
+        return Ok(None);
+    };
+    let (name, at) = word(&shape_field, "entity")?;
+    let size = field("size").ok_or_else(|| {
+        Diagnostic::new(at, "a rigid body needs a size: `size: [a, b, c]` for a box, `size: r` for a sphere")
+    })?;
+    let shape = match name {
+        "box" => {
+            let edges = rd.numbers(&size, "entity", Dim::LENGTH, 3)?;
+            Shape::Cuboid([edges[0], edges[1], edges[2]])
+        }
+        "sphere" => Shape::Sphere(rd.numbers(&size, "entity", Dim::LENGTH, 1)?[0]),
+        other => return Err(Diagnostic::new(at, format!("unknown shape `{other}`; known: box, sphere"))),
+    };
+    let moments =
+        shape.moments(mass).map_err(|why| Diagnostic::new(value_span(&size), format!("entity.size: {why}")))?;
+    let q = match field("orientation") {
+        None => UnitQuaternion::identity(),
+        Some(f) => orientation(rd, &f)?,
+    };
+    let omega = match field("angular_velocity") {
+        None => Vector3::zeros(),
+        Some(f) => Vector3::from_vec(rd.numbers(&f, "entity", Dim::TIME.pow(-1), 3)?),
+    };
+    let size = match shape {
+        Shape::Cuboid(e) => 0.5 * e.iter().fold(0.0f64, |m, a| m.max(*a)),
+        Shape::Sphere(r) => r,
+    };
+    Ok(Some(Rigid { moments: moments.into(), spin: spin_of(q, omega, moments), size }))
+}
+
+/// `{ axis: [x, y, z], angle }` or a unit quaternion `[w, x, y, z]`.
+fn orientation(rd: &Reader, f: &Field) -> Result<UnitQuaternion<f64>, Diagnostic> {
+    let v = f.value.clone().into_inner().next().expect("a value has one child");
+    if v.as_rule() == Rule::block {
+        let mut b = Block::read(Some(v.clone()), v.as_span().into())?;
+        let at: Span = v.as_span().into();
+        let axis = b.take("axis").ok_or_else(|| Diagnostic::new(at, "orientation needs an `axis: [x, y, z]`"))?;
+        let angle = b.take("angle").ok_or_else(|| Diagnostic::new(at, "orientation needs an `angle`"))?;
+        b.check_names("orientation", &["axis", "angle"])?;
+        let (angle, direction) = (
+            rd.numbers(&angle, "orientation", Dim::NONE, 1)?[0],
+            Vector3::from_vec(rd.numbers(&axis, "orientation", Dim::NONE, 3)?),
+        );
+        let axis = Unit::try_new(direction, 0.0)
+            .ok_or_else(|| Diagnostic::new(value_span(&axis), "orientation.axis must not be zero"))?;
+        return Ok(UnitQuaternion::from_axis_angle(&axis, angle));
+    }
+    let c = rd.numbers(f, "entity", Dim::NONE, 4)?;
+    let q = Quaternion::new(c[0], c[1], c[2], c[3]);
+    if (q.norm() - 1.0).abs() > UNIT {
+        return Err(Diagnostic::new(
+            value_span(f),
+            format!("entity.orientation [w, x, y, z] must be a unit quaternion (its norm is {}); or write {{ axis: [x, y, z], angle: θ }}", q.norm()),
+        ));
+    }
+    Ok(UnitQuaternion::from_quaternion(q))
+}
