@@ -27,6 +27,7 @@ fn lattice(k: usize) -> (Vec<Body>, Vec<[f64; 3]>) {
             charge: if i % 2 == 0 { 1.0 } else { -1.0 },
             colour: [0.5, 0.3 - 0.1 * (i % 3) as f64],
             moments: None,
+            solid: None,
         })
         .collect();
     let x = (0..n)
@@ -87,6 +88,7 @@ fn forces(c: &mut Criterion) {
             terms: instance(kind, n),
             constraints: vec![],
             thermostat: None,
+            floor: None,
         };
         let graph = LagrangianGraph::new(&model);
         let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n], chain: vec![], spin: vec![] };

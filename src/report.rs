@@ -147,13 +147,14 @@ impl Summary {
         if let Some(it) = &self.iterations.as_ref().filter(|it| it.solves > 0) {
             let _ = writeln!(
                 s,
-                "iterations  {}: {} solves, {:.1} rounds each on average, at most {}; worst final residual {} (tol {})",
+                "iterations  {}: {} solves, {:.1} rounds each on average, at most {}; worst final residual {}{}",
                 it.what,
                 it.solves,
                 it.iterations as f64 / it.solves as f64,
                 it.most_iterations,
                 up(it.worst_residual),
-                sci(it.tol)
+                // a solver that sweeps a fixed number of times has no tolerance
+                if it.tol > 0.0 { format!(" (tol {})", sci(it.tol)) } else { String::new() }
             );
         }
         if self.explain {

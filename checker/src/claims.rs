@@ -22,16 +22,23 @@ pub enum ClaimKind {
     /// Every distance constraint holds: | |xⱼ − xᵢ| − length | ≤ tol·length (at every
     /// checkpoint, step 0 included).
     ConstraintSatisfied,
+    /// From time `after` on, no point of any body moves faster than `tol` (a speed): |v| + |ω|ρ
+    /// for a rigid body, ρ the reach of its solid.
+    Resting,
+    /// No two solids overlap, and nothing is below the floor, by more than `tol` (a length).
+    NoPenetration,
 }
 
 impl ClaimKind {
-    pub const ALL: [ClaimKind; 6] = [
+    pub const ALL: [ClaimKind; 8] = [
         ClaimKind::EnergyConservation,
         ClaimKind::MomentumConservation,
         ClaimKind::AngularMomentumConservation,
         ClaimKind::DimensionalConsistency,
         ClaimKind::Distance,
         ClaimKind::ConstraintSatisfied,
+        ClaimKind::Resting,
+        ClaimKind::NoPenetration,
     ];
 
     pub fn name(self) -> &'static str {
@@ -42,6 +49,8 @@ impl ClaimKind {
             ClaimKind::DimensionalConsistency => "dimensional_consistency",
             ClaimKind::Distance => "distance",
             ClaimKind::ConstraintSatisfied => "constraint_satisfied",
+            ClaimKind::Resting => "resting",
+            ClaimKind::NoPenetration => "no_penetration",
         }
     }
 
@@ -70,13 +79,21 @@ impl ClaimKind {
             ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied => Some(Dim::NONE),
             ClaimKind::MomentumConservation => Some(Dim([1, 1, -1, 0])),
             ClaimKind::AngularMomentumConservation => Some(Dim([1, 2, -1, 0])),
+            ClaimKind::Resting => Some(Dim::VELOCITY),
+            ClaimKind::NoPenetration => Some(Dim::LENGTH),
             ClaimKind::DimensionalConsistency | ClaimKind::Distance => None,
         }
     }
 
     /// Whether `tol` must be given (a relative tolerance has no natural default).
     pub fn needs_tol(self) -> bool {
-        matches!(self, ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied)
+        matches!(
+            self,
+            ClaimKind::EnergyConservation
+                | ClaimKind::ConstraintSatisfied
+                | ClaimKind::Resting
+                | ClaimKind::NoPenetration
+        )
     }
 
     /// Whether the claim may be declared more than once (for different bodies).
@@ -107,11 +124,14 @@ pub struct Claim {
     /// For a distance claim: its bodies and bounds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub between: Option<Between>,
+    /// For a resting claim: the time from which it holds (0 when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub after: Option<f64>,
 }
 
 impl Claim {
     pub fn new(kind: ClaimKind, tol: Option<f64>, every: u64) -> Claim {
-        Claim { kind, tol, every, axes: None, between: None }
+        Claim { kind, tol, every, axes: None, between: None, after: None }
     }
 
     /// The claim as printed: `momentum_conservation`, `momentum_conservation(x, z)`,
@@ -150,6 +170,17 @@ impl Claim {
         }
         if self.every == 0 {
             return Err(format!("{name}: every must be at least 1"));
+        }
+        if self.kind == ClaimKind::NoPenetration
+            && model.floor.is_none()
+            && model.bodies.iter().filter(|b| b.solid.is_some()).count() < 2
+        {
+            return Err(format!("{name}: the model has no floor and fewer than two solids"));
+        }
+        if self.after.is_some_and(|t| !(t.is_finite() && t >= 0.0))
+            || (self.after.is_some() && self.kind != ClaimKind::Resting)
+        {
+            return Err(format!("{name}: `after` is a time ≥ 0, and only a resting claim takes one"));
         }
         if self.tol.is_some_and(|t| !(t.is_finite() && t > 0.0))
             || (self.tol.is_some() && self.kind.tol_dim().is_none())

@@ -22,6 +22,7 @@ pub mod quantities;
 pub mod real;
 pub mod recheck;
 pub mod render;
+mod solids;
 mod soundness;
 pub mod states;
 pub mod terms;

@@ -28,6 +28,48 @@ pub struct Body {
     /// each state (`Snapshot::spin`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub moments: Option<[f64; 3]>,
+    /// A rigid body's solid: its extent (for contacts and `no_penetration`) and friction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solid: Option<Solid>,
+}
+
+/// The solid a rigid body is, in its body frame, centred on its centre of mass.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solid {
+    pub extent: Extent,
+    /// Its Coulomb friction coefficient μ (a contact of two bodies takes √(μ₁μ₂)).
+    pub friction: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Extent {
+    /// A box's half edge lengths along the body axes.
+    Cuboid([f64; 3]),
+    /// A ball's radius.
+    Ball(f64),
+}
+
+impl Extent {
+    /// The radius of the smallest ball about the centre holding the solid.
+    pub fn reach(&self) -> f64 {
+        match *self {
+            Extent::Cuboid(h) => h.iter().map(|c| c * c).sum::<f64>().sqrt(),
+            Extent::Ball(r) => r,
+        }
+    }
+}
+
+/// The plane y = `y`, normal +y, as a contact the solver keeps (not a spring): nothing may
+/// pass below it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Floor {
+    pub y: f64,
+    /// μ of its contacts; none: each body's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
 }
 
 fn colourless(c: &[f64; 2]) -> bool {
@@ -131,6 +173,9 @@ pub struct Model {
     /// A Nosé–Hoover chain: its links are in every state (`Snapshot::chain`) and its energy in H.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermostat: Option<Chain>,
+    /// A rigid floor (contacts; no energy).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<Floor>,
 }
 
 /// A state of the system as the kernel produced it, exactly.
@@ -169,6 +214,20 @@ impl Model {
             if let Some(m) = b.moments.filter(|m| !m.iter().all(|c| c.is_finite() && *c > 0.0)) {
                 return Err(format!("body {i}: moments of inertia must be finite and positive, got {m:?}"));
             }
+            if b.solid.is_some() != b.moments.is_some() {
+                return Err(format!("body {i}: a rigid body has both moments and a solid, a point mass neither"));
+            }
+            if let Some(s) = &b.solid {
+                let sizes = match s.extent {
+                    Extent::Cuboid(h) => h.to_vec(),
+                    Extent::Ball(r) => vec![r],
+                };
+                if !sizes.iter().all(|c| c.is_finite() && *c > 0.0) || !(s.friction.is_finite() && s.friction >= 0.0) {
+                    return Err(format!(
+                        "body {i}: a solid needs a finite positive extent and a finite μ ≥ 0, got {s:?}"
+                    ));
+                }
+            }
         }
         for (n, t) in self.terms.iter().enumerate() {
             let spec = t.kind.spec();
@@ -200,6 +259,11 @@ impl Model {
             if !(c.length.is_finite() && c.length > 0.0) {
                 return Err(format!("constraint {n}: length must be finite and positive, got {}", c.length));
             }
+        }
+        if let Some(f) =
+            self.floor.filter(|f| !f.y.is_finite() || f.friction.is_some_and(|m| !(m.is_finite() && m >= 0.0)))
+        {
+            return Err(format!("the floor needs a finite y and a finite μ ≥ 0, got {f:?}"));
         }
         self.thermostat.as_ref().map_or(Ok(()), Chain::validate)
     }

@@ -91,7 +91,7 @@ pub struct Outcome {
 }
 
 /// The quantity a dynamic claim is about.
-fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model) -> Vec<E> {
+fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model, s: &Snapshot) -> Vec<E> {
     let axes = |v: [E; 3]| -> Vec<E> {
         let keep = c.axes.unwrap_or([true; 3]);
         v.into_iter().zip(keep).filter(|p| p.1).map(|p| p.0).collect()
@@ -113,13 +113,16 @@ fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model) -> Vec<E> {
                 (d - length.clone()).abs() / length
             })
             .collect(),
+        ClaimKind::Resting => vec![q.fastest_point(model)],
+        ClaimKind::NoPenetration => vec![q.penetration(model, s.x)],
         ClaimKind::DimensionalConsistency => vec![],
     }
 }
 
 /// How far the claimed quantity is from where it must be: |H + Q − H₀|/|H₀| for energy, the
 /// largest claimed component of |X − X₀| for the momenta, max(min − d, d − max) for a distance
-/// (at most 0 inside its bounds), the largest relative error of a constraint.
+/// (at most 0 inside its bounds), the largest relative error of a constraint, the fastest point
+/// (resting), the deepest overlap (no penetration).
 fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
     match (c.kind, &c.between) {
         (ClaimKind::EnergyConservation, _) => {
@@ -131,6 +134,7 @@ fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated
             (d.lift(b.min) - d.clone()).max(d.clone() - d.lift(b.max))
         }
         (ClaimKind::ConstraintSatisfied, _) => now.into_iter().reduce(|m, d| m.max(d)).expect("a constraint"),
+        (ClaimKind::Resting | ClaimKind::NoPenetration, _) => now[0].clone(),
         _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("a component"),
     }
 }
@@ -187,7 +191,12 @@ impl Monitor {
     /// of them, whatever the claim's `every`.
     pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
         let last = self.last_step;
-        let due = |t: &Track| live(t) && (s.step.is_multiple_of(t.claim.every) || s.step == last);
+        // a resting claim speaks of the states from its time on
+        let due = |t: &Track| {
+            live(t)
+                && (s.step.is_multiple_of(t.claim.every) || s.step == last)
+                && t.claim.after.is_none_or(|a| s.t >= a)
+        };
         if self.reference.is_some() && self.ledger.is_none() && !self.tracks.iter().any(due) {
             return Ok(());
         }
@@ -205,7 +214,7 @@ impl Monitor {
                 self.ledger =
                     Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: Outward::point(0.0) });
             }
-            let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model)).collect();
+            let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model, s)).collect();
             self.reference = Some(Reference {
                 t: s.t,
                 x: s.x.to_vec(),
@@ -242,7 +251,7 @@ impl Monitor {
             };
             let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision: BINARY64 };
             (mark.lo, mark.hi) =
-                deviation(&t.claim, measure(&t.claim, &q, model), r.measures[n].clone(), dissipated).bounds();
+                deviation(&t.claim, measure(&t.claim, &q, model, s), r.measures[n].clone(), dissipated).bounds();
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
                 mark = escalate(model, r, s, &t.claim, self.threads, dissipated, tol);
             }
@@ -281,8 +290,8 @@ fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: 
     let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v, chain: &r.chain, spin: &r.spin };
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
-        let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model);
-        let then = measure(claim, &Lifted::new(model, &r0, &proto).on_threads(threads), model);
+        let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model, s);
+        let then = measure(claim, &Lifted::new(model, &r0, &proto).on_threads(threads), model, &r0);
         let (lo, hi) = deviation(claim, now, then, Mpfi::from_bounds(precision, q.bounds())).bounds();
         Mark { step: s.step, lo, hi, tol, precision }
     };
@@ -396,12 +405,13 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![2.0, 1.0, 0.0] }],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         }
     }
 
@@ -486,10 +496,11 @@ mod tests {
         let model = Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None }],
+            bodies: vec![Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None }],
             terms: vec![TermInstance { kind: Kind::UniformAcceleration, sites: vec![], params: vec![0.0, -10.0, 0.0] }],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         };
         (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])
     }

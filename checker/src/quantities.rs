@@ -13,13 +13,13 @@ use std::sync::Arc;
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
-    sites: Vec<Site<R>>,
+    pub(crate) sites: Vec<Site<R>>,
     /// A thermostat chain's links (η, ξ).
     links: Vec<[R; 2]>,
     /// Each rigid body's spin: orientation q, body-frame angular momentum π, principal moments.
-    spins: Vec<Spin<R>>,
+    pub(crate) spins: Vec<Spin<R>>,
     params: Vec<Vec<R>>,
-    zero: R,
+    pub(crate) zero: R,
     /// The exact positions, to choose periodic images from.
     x: Vec<[f64; 3]>,
     cell: Option<Cell>,
@@ -243,10 +243,10 @@ impl<R: PairSum> Lifted<R> {
 }
 
 /// A rigid body's spin lifted into `R`.
-struct Spin<R> {
+pub(crate) struct Spin<R> {
     q: [R; 4],
-    pi: Vec3<R>,
-    moments: Vec3<R>,
+    pub(crate) pi: Vec3<R>,
+    pub(crate) moments: Vec3<R>,
 }
 
 impl<R: Real> Spin<R> {
@@ -255,13 +255,24 @@ impl<R: Real> Spin<R> {
     /// quaternion gives, divided by |q|² so that a q rounded off the unit sphere still turns
     /// without stretching.
     fn world(&self) -> Vec3<R> {
+        self.turn(&self.pi)
+    }
+
+    /// The body axes in the world: the columns of the rotation q/|q| (`turn` of each e_k).
+    pub(crate) fn axes(&self) -> [Vec3<R>; 3] {
+        let zero = self.q[0].lift(0.0);
+        std::array::from_fn(|k| self.turn(&std::array::from_fn(|c| zero.lift(if c == k { 1.0 } else { 0.0 }))))
+    }
+
+    /// A body-frame vector p seen in the world.
+    fn turn(&self, p: &Vec3<R>) -> Vec3<R> {
         let (w, u) = (self.q[0].clone(), [self.q[1].clone(), self.q[2].clone(), self.q[3].clone()]);
         let uu = norm2(&u);
-        let (two, along) = (w.lift(2.0), dot3(&u, &self.pi));
-        let across = cross3(&u, &self.pi);
+        let (two, along) = (w.lift(2.0), dot3(&u, p));
+        let across = cross3(&u, p);
         let n2 = w.clone().powi(2) + uu.clone();
         std::array::from_fn(|c| {
-            ((w.clone().powi(2) - uu.clone()) * self.pi[c].clone()
+            ((w.clone().powi(2) - uu.clone()) * p[c].clone()
                 + two.clone() * along.clone() * u[c].clone()
                 + two.clone() * w.clone() * across[c].clone())
                 / n2.clone()
@@ -386,9 +397,9 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None },
-                Body { mass: 2.5, charge: -0.5, colour: [0.0; 2], moments: None },
-                Body { mass: 0.5, charge: 2.0, colour: [0.0; 2], moments: None },
+                Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None, solid: None },
+                Body { mass: 2.5, charge: -0.5, colour: [0.0; 2], moments: None, solid: None },
+                Body { mass: 0.5, charge: 2.0, colour: [0.0; 2], moments: None, solid: None },
             ],
             terms: vec![
                 TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![k, r0, gamma] },
@@ -398,12 +409,19 @@ mod tests {
             ],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         }
     }
 
     /// One rigid body of moments (1, 2, 4) at rest at the origin.
     fn brick() -> Model {
-        let body = Body { mass: 3.0, charge: 0.0, colour: [0.0; 2], moments: Some([1.0, 2.0, 4.0]) };
+        let body = Body {
+            mass: 3.0,
+            charge: 0.0,
+            colour: [0.0; 2],
+            moments: Some([1.0, 2.0, 4.0]),
+            solid: Some(crate::model::Solid { extent: crate::model::Extent::Cuboid([0.5, 1.0, 1.5]), friction: 0.5 }),
+        };
         Model {
             units: UnitSystem::Reduced,
             cell: None,
@@ -411,6 +429,7 @@ mod tests {
             terms: vec![],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         }
     }
 
@@ -494,7 +513,7 @@ mod tests {
 
     /// 2,197 LJ atoms in a periodic box: ~50,000 pairs, a dozen chunks.
     fn liquid() -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None };
+        let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None };
         let model = Model {
             units: UnitSystem::Reduced,
             cell: Some(Cell { size: [14.3; 3], periodic: [true; 3] }),
@@ -502,6 +521,7 @@ mod tests {
             terms: vec![TermInstance { kind: Kind::LennardJonesShifted, sites: vec![], params: vec![1.0, 1.0, 2.5] }],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         };
         let jitter = |k: usize| ((k * 7919 % 1000) as f64 / 1000.0 - 0.5) * 0.2;
         let x = (0..2197).map(|k| [k % 13, k / 13 % 13, k / 169].map(|c| c as f64 * 1.1 + jitter(k + c))).collect();

@@ -53,6 +53,8 @@ fn measure(kind: ClaimKind, balance: bool, extended: bool) -> &'static str {
         ClaimKind::AngularMomentumConservation => "|ΔL|",
         ClaimKind::Distance => "max(min−d, d−max)",
         ClaimKind::ConstraintSatisfied => "|d−ℓ|/ℓ",
+        ClaimKind::Resting => " point speed",
+        ClaimKind::NoPenetration => " depth",
         ClaimKind::DimensionalConsistency => "",
     }
 }

@@ -84,9 +84,9 @@ fn model() -> Model {
         units: UnitSystem::Reduced,
         cell: None,
         bodies: vec![
-            Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
-            Body { mass: 2.0, charge: 0.0, colour: [0.0; 2], moments: None },
-            Body { mass: 0.5, charge: 0.0, colour: [0.0; 2], moments: None },
+            Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
+            Body { mass: 2.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
+            Body { mass: 0.5, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
         ],
         terms: vec![
             TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![3.0, 1.0, 0.0] },
@@ -95,6 +95,7 @@ fn model() -> Model {
         ],
         constraints: vec![],
         thermostat: None,
+        floor: None,
     }
 }
 

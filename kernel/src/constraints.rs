@@ -297,11 +297,12 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: (0..n)
-                .map(|i| Body { mass: 1.0 + i as f64, charge: 0.0, colour: [0.0; 2], moments: None })
+                .map(|i| Body { mass: 1.0 + i as f64, charge: 0.0, colour: [0.0; 2], moments: None, solid: None })
                 .collect(),
             terms: vec![],
             constraints: (1..n).map(|i| Constraint { bodies: [i - 1, i], length: 1.0 }).collect(),
             thermostat: None,
+            floor: None,
         }
     }
 

@@ -7,6 +7,7 @@
 //! the constraints — and each solver (`solvers/`) is a short program over them.
 
 use crate::constraints::{Constraints, Swept, Tolerance, Unconverged};
+use crate::contact::Solids;
 use crate::forces::derivative::{Adjoint, Direction, Wanted};
 use crate::forces::{group, Force, Frame, Kept, Parts, Pool, Singularity};
 use crate::rigid::{self, Spin};
@@ -30,6 +31,10 @@ pub struct LagrangianGraph {
     constraints: Option<Constraints>,
     /// The rigid bodies' principal moments, in body order (what `State::spin` holds).
     moments: Vec<Vector3<f64>>,
+    /// Whether each body is rigid (has a spin in `State::spin`).
+    rigid: Vec<bool>,
+    /// What can touch, if anything.
+    solids: Option<Solids>,
 }
 
 /// Which forces an evaluation adds up.
@@ -77,7 +82,19 @@ impl LagrangianGraph {
         let colours = model.bodies.iter().map(|b| b.colour).collect();
         let constraints = Constraints::of(model);
         let moments = model.rigid().map(Vector3::from).collect();
-        LagrangianGraph { masses, inverse_masses, velocity_dependent, charges, colours, groups, constraints, moments }
+        let rigid = model.bodies.iter().map(|b| b.moments.is_some()).collect();
+        LagrangianGraph {
+            masses,
+            inverse_masses,
+            velocity_dependent,
+            charges,
+            colours,
+            groups,
+            constraints,
+            moments,
+            rigid,
+            solids: Solids::of(model),
+        }
     }
 
     /// The kinds present, in dispatch order.
@@ -143,6 +160,21 @@ impl LagrangianGraph {
         for (s, &m) in spin.iter_mut().zip(&self.moments) {
             (0..steps).for_each(|_| rigid::free_step(s, m, h));
         }
+    }
+
+    /// The rigid bodies' principal moments, in the order of `State::spin`.
+    pub fn moments(&self) -> &[Vector3<f64>] {
+        &self.moments
+    }
+
+    /// The solids and floor the contact solver keeps apart (none: nothing can touch).
+    pub fn solids(&self) -> Option<Solids> {
+        self.solids.clone()
+    }
+
+    /// Whether body `i` is rigid.
+    pub fn is_rigid(&self, i: usize) -> bool {
+        self.rigid[i]
     }
 
     /// x += h·v.

@@ -4,6 +4,7 @@
 
 pub mod checking;
 pub mod constraints;
+pub mod contact;
 pub mod derivatives;
 pub mod forces;
 pub mod grad;

@@ -116,10 +116,11 @@ mod tests {
         let model = Model {
             units: UnitSystem::Reduced,
             cell: None,
-            bodies: vec![Body { mass: 1.5, charge: 0.0, colour: [0.0; 2], moments: None }; n],
+            bodies: vec![Body { mass: 1.5, charge: 0.0, colour: [0.0; 2], moments: None, solid: None }; n],
             terms: vec![],
             constraints: vec![],
             thermostat: Some(chain(0.8, 0.5, 3, 3.0 * n as f64 - 3.0)),
+            floor: None,
         };
         let v = (0..n as u64).map(|i| std::array::from_fn(|c| crate::random::normal(1, 0, 3 * i + c as u64))).collect();
         (model, State { step: 0, t: 0.0, x: vec![[0.0; 3]; n], v, chain: vec![[0.0; 2]; 3], spin: vec![] })

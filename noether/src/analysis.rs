@@ -68,7 +68,10 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
                 }
                 _ => false,
             };
-            let status = if s == Symmetry::Time && !model.terms.iter().any(|t| lagrangian(&t)) {
+            let status = if s == Symmetry::Time
+                && !model.terms.iter().any(|t| lagrangian(&t))
+                && contacts_break(model, s).is_empty()
+            {
                 let by = kinds_of(model.terms.iter().filter(dissipation));
                 if by.is_empty() {
                     Status::Conserved { shares: vec![] }
@@ -83,6 +86,7 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
                 if by_box {
                     by.push("the periodic box".into());
                 }
+                by.extend(contacts_break(model, s));
                 if by.is_empty() {
                     let sharing = |t: &&TermInstance| table.of(t.kind).is_some_and(|e| e.charge_share.contains_key(&s));
                     Status::Conserved { shares: kinds_of(model.terms.iter().filter(sharing)) }
@@ -94,6 +98,28 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
         })
         .collect();
     Analysis { laws }
+}
+
+/// What the contacts, which are no terms, break: a rigid floor (normal y) every symmetry that
+/// moves its plane, and with friction the others along it, since it pushes against the bodies'
+/// sliding; and any contact the energy, since it is inelastic. Contacts between solids
+/// alone push equally and oppositely at one point, so they keep both momenta.
+fn contacts_break(model: &Model, s: Symmetry) -> Vec<String> {
+    use Symmetry::*;
+    let solids: Vec<f64> = model.bodies.iter().filter_map(|b| b.solid.map(|s| s.friction)).collect();
+    let mut by = vec![];
+    if let Some(floor) = model.floor {
+        let gripped = floor.friction.map_or(solids.iter().any(|&mu| mu > 0.0), |mu| mu > 0.0);
+        if matches!(s, TranslationY | RotationX | RotationZ | BoostY) {
+            by.push("the rigid floor".to_string());
+        } else if gripped && matches!(s, TranslationX | TranslationZ | RotationY | BoostX | BoostZ) {
+            by.push("the rigid floor's friction".to_string());
+        }
+    }
+    if s == Time && (model.floor.is_some() || solids.len() >= 2) {
+        by.push("the contacts (inelastic)".to_string());
+    }
+    by
 }
 
 /// The claim kind a symmetry's charge is certified by, if the checker has one.
@@ -186,8 +212,8 @@ mod tests {
     use lagra_checker::model::{Body, Cell, UnitSystem};
 
     fn model(terms: Vec<TermInstance>, cell: Option<Cell>) -> Model {
-        let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None }; 3];
-        Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![], thermostat: None }
+        let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None, solid: None }; 3];
+        Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![], thermostat: None, floor: None }
     }
 
     fn term(kind: Kind, params: &[f64]) -> TermInstance {

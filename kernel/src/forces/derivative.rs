@@ -428,6 +428,7 @@ mod tests {
                 charge: rng.uniform(-1.0, 1.0),
                 colour: [0.0; 2],
                 moments: None,
+                solid: None,
             })
             .collect();
         let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
@@ -446,6 +447,7 @@ mod tests {
                 terms,
                 constraints: vec![],
                 thermostat: None,
+                floor: None,
             },
             x,
             v,

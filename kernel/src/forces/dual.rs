@@ -120,7 +120,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         .iter()
         .zip(&q)
         .zip(&colour)
-        .map(|((&mass, &charge), &colour)| Body { mass, charge, colour, moments: None })
+        .map(|((&mass, &charge), &colour)| Body { mass, charge, colour, moments: None, solid: None })
         .collect();
     let model = Model {
         units: UnitSystem::Reduced,
@@ -129,6 +129,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         terms: vec![term.clone()],
         constraints: vec![],
         thermostat: None,
+        floor: None,
     };
 
     let mut fast = vec![[0.0; 3]; n];

@@ -289,11 +289,28 @@ mod tests {
             .collect();
         let n = spec.shape.arity().max(2);
         let bodies = (0..n)
-            .map(|i| Body { mass: 1.0, charge: 1.0 - i as f64, colour: [0.5, 0.3 - 0.2 * i as f64], moments: None })
+            .map(|i| Body {
+                mass: 1.0,
+                charge: 1.0 - i as f64,
+                colour: [0.5, 0.3 - 0.2 * i as f64],
+                moments: None,
+                solid: None,
+            })
             .collect();
         let sites = if matches!(spec.shape, Shape::Bond(_)) { (0..n).collect() } else { vec![] };
         let terms = vec![TermInstance { kind, sites, params }];
-        (Model { units: UnitSystem::Reduced, cell: None, bodies, terms, constraints: vec![], thermostat: None }, n)
+        (
+            Model {
+                units: UnitSystem::Reduced,
+                cell: None,
+                bodies,
+                terms,
+                constraints: vec![],
+                thermostat: None,
+                floor: None,
+            },
+            n,
+        )
     }
 
     /// Every term at positions `x` (n of them): finite forces and energy, or a clear error.

@@ -7,13 +7,14 @@ use super::lattice::{self, Draw, Packing};
 use super::shape;
 use super::{Pair, Rule};
 use crate::constraints::{Constraints, Tolerance};
+use crate::contact::Solids;
 use crate::predict::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Sampling, Scene, Solver};
 use crate::solvers::{Integrator, Settings};
 use crate::tail::Tail;
 use crate::thermostat::{self, Bath, Thermostat};
 use lagra_checker::claims::{Between, Claim, ClaimKind};
-use lagra_checker::model::{Body, Cell, Constraint, Model, TermInstance, UnitSystem};
+use lagra_checker::model::{Body, Cell, Constraint, Floor, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
 use lagra_checker::units::Dim;
 use std::collections::HashMap;
@@ -21,8 +22,19 @@ use std::collections::HashMap;
 /// Types every scene knows without declaring them: display sizes only.
 const BUILTIN_TYPES: &[(&str, f64)] = &[("ball_small", 0.15), ("ball", 0.3), ("ball_large", 0.6)];
 const LATTICE_FIELDS: &[&str] = &["type", "kind", "density", "cells", "temperature", "seed", "velocities"];
-const ENTITY_FIELDS: &[&str] =
-    &["type", "position", "velocity", "mass", "charge", "colour", "size", "shape", "orientation", "angular_velocity"];
+const ENTITY_FIELDS: &[&str] = &[
+    "type",
+    "position",
+    "velocity",
+    "mass",
+    "charge",
+    "colour",
+    "size",
+    "shape",
+    "orientation",
+    "angular_velocity",
+    "friction",
+];
 
 /// The colour charges, weights of SU(3)'s fundamental representation (|c|² = 1/3), and the
 /// antiquarks' negatives.
@@ -86,6 +98,10 @@ struct Compiler<'a> {
     domain: Option<String>,
     /// Whether the box came from a lattice.
     lattice: bool,
+    /// A rigid floor (`floor` without `k`) and where it stands.
+    floor: Option<(Floor, Span)>,
+    /// Where each rigid body was declared, in body order (none for the others).
+    solid_at: Vec<Option<Span>>,
 }
 
 pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
@@ -124,6 +140,8 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         thermostat: None,
         constraints: vec![],
         cell: None,
+        floor: None,
+        solid_at: vec![],
         term_at: vec![],
         term_line: vec![],
         description: None,
@@ -201,6 +219,9 @@ impl<'a> Compiler<'a> {
                 };
                 let kind = lookup(&kw, |s| s == shape, what)?;
                 let mut block = Block::read(next(), kw.as_span().into())?;
+                if kind == Kind::ContactFloor && block.get("k").is_none() {
+                    return self.rigid_floor(block, kw.as_span().into());
+                }
                 // an external term acts on every body, or only on those listed in `on`
                 let on = match block.take("on") {
                     Some(f) if shape == Shape::External => self.rd.body_list(&f, kind.name())?,
@@ -301,9 +322,11 @@ impl<'a> Compiler<'a> {
             self.body(&mut |name| if shaped && name == "size" { None } else { field(name) }, at, size)?;
         if let Some(r) = shape::rigid(&self.rd, &mut field, body.mass)? {
             body.moments = Some(r.moments);
+            body.solid = Some(r.solid);
             self.spin0.push(r.spin);
             size = r.size;
         }
+        self.solid_at.push(body.solid.map(|_| at));
         self.bodies.push(body);
         self.x0.push(x);
         self.v0.push(v);
@@ -359,7 +382,7 @@ impl<'a> Compiler<'a> {
             Some(f) => self.rd.positive(&f, "entity", Dim::LENGTH)?,
             None => size.unwrap_or(0.0),
         };
-        Ok((Body { mass, charge, colour, moments: None }, size))
+        Ok((Body { mass, charge, colour, moments: None, solid: None }, size))
     }
 
     /// `lattice { type, kind: fcc, density, cells: [nx, ny, nz], temperature, seed, velocities }`:
@@ -441,10 +464,38 @@ impl<'a> Compiler<'a> {
         self.lattice = true;
         for (x, v) in x.into_iter().zip(v) {
             self.bodies.push(body.clone());
+            self.solid_at.push(None);
             self.x0.push(x);
             self.v0.push(v);
             self.sizes.push(size);
         }
+        Ok(())
+    }
+
+    /// `floor { y, friction }` with no `k`: a contact the solver keeps, not a spring.
+    fn rigid_floor(&mut self, mut b: Block, at: Span) -> Result<(), Diagnostic> {
+        if self.floor.is_some() {
+            return err(at, "second rigid floor");
+        }
+        let y = b.take("y").map(|f| self.rd.numbers(&f, "floor", Dim::LENGTH, 1)).transpose()?.map_or(0.0, |v| v[0]);
+        let friction = match b.take("friction") {
+            Some(f) => {
+                let mu = self.rd.numbers(&f, "floor", Dim::NONE, 1)?[0];
+                if !(mu >= 0.0) {
+                    return err(value_span(&f), format!("floor.friction must be ≥ 0, got {mu}"));
+                }
+                Some(mu)
+            }
+            None => None,
+        };
+        let names = ["y", "friction"];
+        let penalty: Vec<&str> = Kind::ContactFloor.spec().params.iter().map(|p| p.name).collect();
+        if let Some(f) = penalty.iter().filter(|n| !names.contains(n)).find_map(|n| b.get(n)) {
+            let extra = f.name;
+            return err(f.span, format!("floor.{extra} belongs to a penalty floor: give `k` too (a spring), or leave it out (a rigid floor)"));
+        }
+        b.check_names("floor", &names)?;
+        self.floor = Some((Floor { y, friction }, at));
         Ok(())
     }
 
@@ -478,11 +529,27 @@ impl<'a> Compiler<'a> {
         }
         let owner = kind.name();
         let mut claim = Claim::new(kind, None, 1);
-        if let (Some(f), Some(dim)) = (b.take("tol"), kind.tol_dim()) {
+        // a resting claim's tolerance is a speed, written `max_speed`
+        let tol_name = if kind == ClaimKind::Resting { "max_speed" } else { "tol" };
+        if let (Some(f), Some(dim)) = (b.take(tol_name), kind.tol_dim()) {
             claim.tol = Some(self.rd.positive(&f, owner, dim)?);
         }
         if kind.needs_tol() && claim.tol.is_none() {
-            return err(at, format!("{owner} needs a tolerance: `{{ tol: 1e-5 }}` (relative)"));
+            let example = match kind {
+                ClaimKind::Resting => "`{ max_speed: 0.01, after: 2 }` (a speed, a time)",
+                ClaimKind::NoPenetration => "`{ tol: 0.001 }` (a length)",
+                _ => "`{ tol: 1e-5 }` (relative)",
+            };
+            return err(at, format!("{owner} needs a tolerance: {example}"));
+        }
+        if kind == ClaimKind::Resting {
+            if let Some(f) = b.take("after") {
+                let t = self.rd.numbers(&f, owner, Dim::TIME, 1)?[0];
+                if !(t >= 0.0) {
+                    return err(value_span(&f), format!("resting.after must be a time ≥ 0, got {t}"));
+                }
+                claim.after = Some(t);
+            }
         }
         if kind.is_dynamic() {
             if let Some(f) = b.take("every") {
@@ -493,7 +560,10 @@ impl<'a> Compiler<'a> {
             ClaimKind::DimensionalConsistency => vec![],
             ClaimKind::Distance => vec!["between", "min", "max", "every"],
             ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation => vec!["tol", "every", "axes"],
-            ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied => vec!["tol", "every"],
+            ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied | ClaimKind::NoPenetration => {
+                vec!["tol", "every"]
+            }
+            ClaimKind::Resting => vec!["every"],
         };
         if allowed.contains(&"axes") {
             if let Some(f) = b.take("axes") {
@@ -607,7 +677,7 @@ impl<'a> Compiler<'a> {
         if let Some(f) = b.take("tol") {
             settings.push(("tol", self.rd.positive(&f, "solver", Dim::NONE)?, f.span));
         }
-        for name in ["iterations", "window"] {
+        for name in ["iterations", "window", "substeps"] {
             if let Some(f) = b.take(name) {
                 let n = self.rd.count(&f, "solver")?;
                 if n > u32::MAX as u64 {
@@ -653,7 +723,8 @@ impl<'a> Compiler<'a> {
     /// checked to be one it takes; and whether it handles the model's terms.
     fn settle(&self, b: SolverBlock) -> Result<Solver, Diagnostic> {
         let constrained = !self.constraints.is_empty();
-        let (integrator, at) = b.integrator.unwrap_or((Integrator::default_for(constrained), b.at));
+        let touching = self.floor.is_some() || self.bodies.iter().filter(|b| b.solid.is_some()).count() >= 2;
+        let (integrator, at) = b.integrator.unwrap_or((Integrator::default_for(constrained, touching), b.at));
         let mut settings: Settings = integrator.defaults();
         for (name, value, span) in b.settings {
             if !integrator.settings().contains(&name) {
@@ -671,6 +742,7 @@ impl<'a> Compiler<'a> {
             match name {
                 "tol" => settings.tol = value,
                 "iterations" => settings.iterations = value as u32,
+                "substeps" => settings.substeps = value as u32,
                 _ => settings.window = value as u32,
             }
         }
@@ -686,7 +758,7 @@ impl<'a> Compiler<'a> {
                 );
             }
         }
-        integrator.handles(&self.terms, constrained).map_err(|(term, why)| {
+        integrator.handles(&self.terms, constrained, touching).map_err(|(term, why)| {
             let wherefrom = term.map(|n| format!(" (line {})", self.term_line[n])).unwrap_or_default();
             Diagnostic::new(at, format!("{why}{wherefrom}"))
         })?;
@@ -718,6 +790,7 @@ impl<'a> Compiler<'a> {
             terms: vec![],
             constraints: out,
             thermostat: None,
+            floor: None,
         };
         if let Some(k) = Constraints::of(&model) {
             let tol = Tolerance { tol: settings.tol.min(1e-12), sweeps: settings.iterations.max(1000) };
@@ -779,7 +852,20 @@ impl<'a> Compiler<'a> {
             terms: self.terms,
             constraints,
             thermostat: None,
+            floor: self.floor.map(|f| f.0),
         };
+        apart(&model, &self.x0, &self.spin0, &self.solid_at, self.floor.map(|f| f.1))?;
+        for (c, s) in self.claims.iter().zip(&self.claim_spans) {
+            if matches!(c.kind, ClaimKind::Resting | ClaimKind::NoPenetration) {
+                c.validate(&model).map_err(|e| Diagnostic::new(*s, e))?;
+            }
+            if c.after.is_some_and(|t| t > solver.steps as f64 * solver.dt) {
+                return err(
+                    *s,
+                    format!("resting.after is past the end of the run (t = {})", solver.steps as f64 * solver.dt),
+                );
+            }
+        }
         let thermostat = match self.thermostat {
             None => None,
             Some((kt, t, links, at)) => {
@@ -828,6 +914,37 @@ impl<'a> Compiler<'a> {
             thermostat,
             sampling,
         })
+    }
+}
+
+/// Solids must start apart and above the floor: the contact solver would fling overlapping
+/// bodies apart. An overlap is an error at the later body's entity (or at the floor).
+fn apart(
+    model: &Model,
+    x: &[[f64; 3]],
+    spin: &[[f64; 7]],
+    at: &[Option<Span>],
+    floor_at: Option<Span>,
+) -> Result<(), Diagnostic> {
+    let Some(solids) = Solids::of(model) else { return Ok(()) };
+    // well above rounding, well below any overlap the solver would have to undo
+    let tolerance = 1e-6 * solids.margin;
+    let touches = solids.touching(&solids.poses(x, spin));
+    match touches.into_iter().find(|t| t.depth > tolerance) {
+        None => Ok(()),
+        Some(t) => {
+            let depth = t.depth;
+            match t.a {
+                None => err(
+                    at[t.b].or(floor_at).expect("a floor contact has a floor"),
+                    format!("body {} starts {depth:.3e} below the floor: solids must start apart", t.b),
+                ),
+                Some(a) => err(
+                    at[a.max(t.b)].expect("a solid was declared"),
+                    format!("bodies {a} and {} start interpenetrated by {depth:.3e}: solids must start apart", t.b),
+                ),
+            }
+        }
     }
 }
 

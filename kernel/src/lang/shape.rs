@@ -1,17 +1,22 @@
 //! An entity with a `shape` is a rigid body: `shape: box, size: [a, b, c]` (edge lengths) or
 //! `shape: sphere, size: r`, with `orientation: { axis: [x, y, z], angle: 30 deg }` (or a unit
-//! quaternion `[w, x, y, z]`) and `angular_velocity: [x, y, z]` (world frame, 1/time). Its
-//! moments of inertia come from its shape and mass.
+//! quaternion `[w, x, y, z]`), `angular_velocity: [x, y, z]` (world frame, 1/time) and
+//! `friction` (its Coulomb μ, 0.5 if not given). Its moments of inertia come from its shape and
+//! mass.
 
 use super::block::{value_span, word, Block, Field, Reader};
 use super::diagnostic::{Diagnostic, Span};
 use super::Rule;
 use crate::rigid::{spin_of, Shape, Spin};
+use lagra_checker::model::{Extent, Solid};
 use lagra_checker::units::Dim;
 use nalgebra::{Quaternion, Unit, UnitQuaternion, Vector3};
 
 /// The fields only a rigid body has.
-pub const RIGID_FIELDS: &[&str] = &["shape", "orientation", "angular_velocity"];
+pub const RIGID_FIELDS: &[&str] = &["shape", "orientation", "angular_velocity", "friction"];
+
+/// A solid's Coulomb friction coefficient when it gives none.
+const FRICTION: f64 = 0.5;
 
 /// How far from 1 a quaternion's norm may be: it is then normalised; farther is an error (a
 /// typo is likelier than a scaled rotation).
@@ -21,6 +26,7 @@ const UNIT: f64 = 1e-9;
 pub struct Rigid {
     pub moments: [f64; 3],
     pub spin: Spin,
+    pub solid: Solid,
     /// Its largest half-extent, for display.
     pub size: f64,
 }
@@ -64,11 +70,22 @@ pub fn rigid<'a>(
         None => Vector3::zeros(),
         Some(f) => Vector3::from_vec(rd.numbers(&f, "entity", Dim::TIME.pow(-1), 3)?),
     };
-    let size = match shape {
-        Shape::Cuboid(e) => 0.5 * e.iter().fold(0.0f64, |m, a| m.max(*a)),
-        Shape::Sphere(r) => r,
+    let friction = match field("friction") {
+        Some(f) => {
+            let mu = rd.numbers(&f, "entity", Dim::NONE, 1)?[0];
+            if !(mu >= 0.0) {
+                return Err(Diagnostic::new(value_span(&f), format!("entity.friction must be ≥ 0, got {mu}")));
+            }
+            mu
+        }
+        None => FRICTION,
     };
-    Ok(Some(Rigid { moments: moments.into(), spin: spin_of(q, omega, moments), size }))
+    let (size, extent) = match shape {
+        Shape::Cuboid(e) => (0.5 * e.iter().fold(0.0f64, |m, a| m.max(*a)), Extent::Cuboid(e.map(|c| 0.5 * c))),
+        Shape::Sphere(r) => (r, Extent::Ball(r)),
+    };
+    let solid = Solid { extent, friction };
+    Ok(Some(Rigid { moments: moments.into(), spin: spin_of(q, omega, moments), solid, size }))
 }
 
 /// `{ axis: [x, y, z], angle }` or a unit quaternion `[w, x, y, z]`.

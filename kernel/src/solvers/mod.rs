@@ -4,6 +4,7 @@
 
 mod action_descent;
 mod boris;
+mod impulses;
 mod langevin;
 mod nose_hoover;
 mod rattle;
@@ -13,6 +14,7 @@ mod velocity_verlet;
 mod yoshida;
 
 use crate::constraints::{Tolerance, Unconverged};
+use crate::contact::Solids;
 use crate::forces::Singularity;
 use crate::graph::LagrangianGraph;
 use crate::scene::Scene;
@@ -32,6 +34,7 @@ pub enum Integrator {
     Boris,
     Rattle,
     ActionDescent,
+    SequentialImpulses,
 }
 
 /// The settings a `solver` block may give beyond dt and the run length, each read by the
@@ -45,10 +48,12 @@ pub struct Settings {
     pub iterations: u32,
     /// Steps per action window.
     pub window: u32,
+    /// Substeps of a contact step (the contacts found once, solved at each).
+    pub substeps: u32,
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 7] = [
+    pub const ALL: [Integrator; 8] = [
         Integrator::VelocityVerlet,
         Integrator::SymplecticEuler,
         Integrator::Yoshida4,
@@ -56,6 +61,7 @@ impl Integrator {
         Integrator::Boris,
         Integrator::Rattle,
         Integrator::ActionDescent,
+        Integrator::SequentialImpulses,
     ];
 
     pub fn name(self) -> &'static str {
@@ -67,6 +73,7 @@ impl Integrator {
             Integrator::Boris => "boris",
             Integrator::Rattle => "rattle",
             Integrator::ActionDescent => "action_descent",
+            Integrator::SequentialImpulses => "sequential_impulses",
         }
     }
 
@@ -84,13 +91,16 @@ impl Integrator {
             Integrator::Boris => "second order; rotates velocities in magnetic fields (|v| kept exactly)",
             Integrator::Rattle => "velocity Verlet keeping distance constraints (SHAKE/RATTLE)",
             Integrator::ActionDescent => "the discrete action over a window, made stationary by descent",
+            Integrator::SequentialImpulses => {
+                "contact and friction by sequential impulses; the default where solids touch"
+            }
         }
     }
 
     /// The order of the error in dt, as the theory gives it (`lagra bench precision` measures it).
     pub fn order(self) -> u32 {
         match self {
-            Integrator::SymplecticEuler => 1,
+            Integrator::SymplecticEuler | Integrator::SequentialImpulses => 1,
             Integrator::Yoshida4 | Integrator::Rk4 => 4,
             _ => 2,
         }
@@ -102,6 +112,7 @@ impl Integrator {
         match self {
             Integrator::Rattle => &["tol", "iterations"],
             Integrator::ActionDescent => &["window", "iterations", "tol"],
+            Integrator::SequentialImpulses => &["iterations", "substeps"],
             _ => &[],
         }
     }
@@ -109,14 +120,18 @@ impl Integrator {
     /// The settings it uses when the scene gives none.
     pub fn defaults(self) -> Settings {
         match self {
-            Integrator::ActionDescent => Settings { tol: 1e-12, iterations: 1000, window: 16 },
-            _ => Settings { tol: 1e-10, iterations: 1000, window: 1 },
+            Integrator::ActionDescent => Settings { tol: 1e-12, iterations: 1000, window: 16, substeps: 1 },
+            Integrator::SequentialImpulses => Settings { tol: 0.0, iterations: 10, window: 1, substeps: 4 },
+            _ => Settings { tol: 1e-10, iterations: 1000, window: 1, substeps: 1 },
         }
     }
 
-    /// The integrator a scene gets when its solver block names none: one that handles it.
-    pub fn default_for(constrained: bool) -> Integrator {
-        if constrained {
+    /// The integrator a scene gets when its solver block names none: one that handles it
+    /// (`touching`: solids can touch — a rigid floor, or two rigid bodies).
+    pub fn default_for(constrained: bool, touching: bool) -> Integrator {
+        if touching {
+            Integrator::SequentialImpulses
+        } else if constrained {
             Integrator::Rattle
         } else {
             Integrator::VelocityVerlet
@@ -128,8 +143,22 @@ impl Integrator {
     /// with the rest, so no other may depend on velocities; the discrete action here is that of
     /// L = T − V. `Err` names the term that cannot be handled (by its index), or none for the
     /// constraints.
-    pub fn handles(self, terms: &[TermInstance], constrained: bool) -> Result<(), (Option<usize>, String)> {
+    pub fn handles(
+        self,
+        terms: &[TermInstance],
+        constrained: bool,
+        touching: bool,
+    ) -> Result<(), (Option<usize>, String)> {
         let name = self.name();
+        if touching && constrained {
+            return Err((None, "no solver keeps both distance constraints and contacts yet".into()));
+        }
+        if touching && self != Integrator::SequentialImpulses {
+            return Err((
+                None,
+                format!("{name} lets solids pass through each other and the floor: use `sequential_impulses`"),
+            ));
+        }
         if constrained && self != Integrator::Rattle {
             return Err((None, format!("{name} cannot keep constraints: use `rattle`")));
         }
@@ -261,6 +290,10 @@ pub trait Solver {
     fn iterations(&self) -> Option<&Iterations> {
         None
     }
+    /// Whether it turns the rigid bodies itself (else the stepper turns them freely after it).
+    fn rotates(&self) -> bool {
+        false
+    }
 }
 
 /// The integrator a scene chose, at work on a graph.
@@ -285,6 +318,10 @@ impl Stepper {
             Integrator::Boris => Box::new(boris::Boris::new(g, s, at)?),
             Integrator::Rattle => Box::new(rattle::Rattle::new(g, at, tol)),
             Integrator::ActionDescent => Box::new(action_descent::ActionDescent::new(at, settings)),
+            Integrator::SequentialImpulses => {
+                let solids = g.solids().unwrap_or_else(|| Solids::none(s.x.len()));
+                Box::new(impulses::Impulses::new(at, solids, settings.substeps, settings.iterations))
+            }
         };
         Ok(Stepper { solver })
     }
@@ -330,7 +367,9 @@ impl Stepper {
         let from = s.step;
         let done = self.solver.advance_to(g, s, dt, until);
         // the rigid bodies turn through the steps taken, failed or not (`LagrangianGraph::turn`)
-        g.turn(&mut s.spin, dt, s.step - from);
+        if !self.solver.rotates() {
+            g.turn(&mut s.spin, dt, s.step - from);
+        }
         done
     }
 

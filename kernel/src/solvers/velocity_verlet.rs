@@ -76,12 +76,13 @@ mod tests {
             units: UnitSystem::Reduced,
             cell: None,
             bodies: vec![
-                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None },
-                Body { mass: 3.0, charge: 0.0, colour: [0.0; 2], moments: None },
+                Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
+                Body { mass: 3.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None },
             ],
             terms: vec![TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![5.0, 1.0, gamma] }],
             constraints: vec![],
             thermostat: None,
+            floor: None,
         };
         let s = State {
             step: 0,

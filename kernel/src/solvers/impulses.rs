@@ -1,0 +1,257 @@
+//! Sequential impulses (Catto, GDC 2005–2014; the contact solver of Box2D and Bullet): a step
+//! kicks with the forces, then finds the contact impulses by projected Gauss–Seidel on the
+//! velocity-level complementarity problem — each contact's normal impulse clamped to push only,
+//! its friction to Coulomb's cone μλₙ — warm-started from the last step's impulses, and only
+//! then drifts and turns the bodies with the velocities the contacts allow. Depth beyond a slop
+//! is fed back as a velocity (Baumgarte), and a gap closes at most in one step (speculative
+//! contacts), so resting bodies neither sink nor bounce. Restitution is 0.
+//!
+//! Symplectic Euler in free flight (first order), with each rigid body turned exactly by the
+//! free-body splitting (`rigid::free_step`): its spin enters the solve as ω = R π/I and leaves as
+//! π = I Rᵀω. It is not AVBD (Chen et al. 2024), the primal block descent the design names:
+//! that is the next step; this dual solver is the one users of Box2D, Bullet and PhysX know.
+
+use super::{Evaluated, Failure, Iterations, Solver};
+use crate::contact::{Pose, Solids, Touch};
+use crate::graph::LagrangianGraph;
+use crate::rigid;
+use crate::state::State;
+use nalgebra::{Matrix3, Vector3};
+use std::collections::HashMap;
+
+type V = Vector3<f64>;
+
+/// Depth fed back per step (Baumgarte's β).
+const FEEDBACK: f64 = 0.2;
+/// Depth left alone, as a share of the contact margin, so resting contacts persist.
+const SLOP: f64 = 0.05;
+
+pub struct Impulses {
+    pub at: Evaluated,
+    pub solids: Solids,
+    pub substeps: u32,
+    pub sweeps: u32,
+    /// Last step's impulses (normal, two tangents) by pair and place, to start from.
+    warm: HashMap<(usize, usize), Vec<(V, [f64; 3])>>,
+    iterations: Iterations,
+}
+
+impl Impulses {
+    pub fn new(at: Evaluated, solids: Solids, substeps: u32, sweeps: u32) -> Impulses {
+        let iterations = Iterations { what: "contact sweeps (residual: a normal speed)", ..Default::default() };
+        Impulses { at, solids, substeps, sweeps, warm: HashMap::new(), iterations }
+    }
+}
+
+/// A body's share in the solve: 1/m, the world inverse inertia, its velocity and spin rate.
+struct Mobile {
+    inverse_mass: f64,
+    inverse_inertia: Matrix3<f64>,
+    v: V,
+    omega: V,
+}
+
+impl Mobile {
+    fn at(&self, r: &V) -> V {
+        self.v + self.omega.cross(r)
+    }
+    fn push(&mut self, r: &V, p: &V) {
+        self.v += p * self.inverse_mass;
+        self.omega += self.inverse_inertia * r.cross(p);
+    }
+    /// How much velocity an impulse along n at r makes along n, inverted.
+    fn resistance(&self, r: &V, n: &V) -> f64 {
+        self.inverse_mass + n.dot(&(self.inverse_inertia * r.cross(n)).cross(r))
+    }
+}
+
+/// One contact in the solve: its bodies (the floor is none), where it holds on each body (in
+/// the body's frame), its depth at the step's start, and, at the current substep, its lever
+/// arms, effective masses and target normal speed; its impulses carry over the substeps.
+struct Row {
+    touch: Touch,
+    anchors: [V; 2],
+    dirs: [V; 3],
+    ra: V,
+    rb: V,
+    mass: [f64; 3],
+    target: f64,
+    lambda: [f64; 3],
+}
+
+impl Row {
+    fn new(touch: Touch, poses: &[Pose]) -> Row {
+        let local = |i: Option<usize>| {
+            i.map_or(touch.point, |i| poses[i].rotation.transpose() * (touch.point - poses[i].centre))
+        };
+        let n = touch.normal;
+        let t1 = if n.x.abs() < 0.9 { n.cross(&V::x()) } else { n.cross(&V::y()) }.normalize();
+        Row {
+            anchors: [local(touch.a), local(Some(touch.b))],
+            dirs: [n, t1, n.cross(&t1)],
+            ra: V::zeros(),
+            rb: V::zeros(),
+            mass: [0.0; 3],
+            target: 0.0,
+            lambda: [0.0; 3],
+            touch,
+        }
+    }
+
+    /// Lever arms, effective masses and target at the current poses: the depth is the step's
+    /// minus how far the anchors have parted along the normal since; depth beyond the slop is
+    /// fed back, a gap may close within the substep.
+    fn prepare(&mut self, poses: &[Pose], mobile: &[Mobile], h: f64, slop: f64) {
+        let world = |i: Option<usize>, l: &V| i.map_or(*l, |i| poses[i].centre + poses[i].rotation * l);
+        let (wa, wb) = (world(self.touch.a, &self.anchors[0]), world(Some(self.touch.b), &self.anchors[1]));
+        // both bodies are pushed at one point, midway between their anchors, so the pair of
+        // impulses exerts no net torque: the angular momentum is kept, not only the momentum
+        let at = 0.5 * (wa + wb);
+        self.ra = self.touch.a.map_or(V::zeros(), |a| at - poses[a].centre);
+        self.rb = at - poses[self.touch.b].centre;
+        let (a, (ra, rb)) = (self.touch.a, (self.ra, self.rb));
+        self.mass = self.dirs.map(|d| {
+            let k = a.map_or(0.0, |a| mobile[a].resistance(&ra, &d)) + mobile[self.touch.b].resistance(&rb, &d);
+            if k > 0.0 {
+                1.0 / k
+            } else {
+                0.0
+            }
+        });
+        let depth = self.touch.depth - self.dirs[0].dot(&(wb - wa));
+        self.target = if depth > slop { FEEDBACK * (depth - slop) / h } else { depth.min(0.0) / h };
+    }
+}
+
+impl Solver for Impulses {
+    fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
+        let h = dt / self.substeps as f64;
+        let slop = SLOP * self.solids.margin;
+        let poses = self.solids.poses(&s.x, &s.spin);
+        let mut rows: Vec<Row> = self.solids.touching(&poses).into_iter().map(|t| Row::new(t, &poses)).collect();
+        // from the highest contact down: a stack's weight reaches the floor within one sweep
+        rows.sort_by(|a, b| b.touch.point.y.total_cmp(&a.touch.point.y));
+        self.start_warm(&mut rows);
+        // the residual: the largest normal speed the last sweep still had to correct
+        let mut residual = 0.0f64;
+        for _ in 0..self.substeps {
+            g.kick(&mut s.v, &self.at.f, h);
+            let poses = self.solids.poses(&s.x, &s.spin);
+            let mut mobile = mobiles(g, s, &poses);
+            for r in rows.iter_mut() {
+                r.prepare(&poses, &mobile, h, slop);
+                for k in 0..3 {
+                    apply(r, &mut mobile, k, r.lambda[k]);
+                }
+            }
+            for _ in 0..self.sweeps {
+                residual = rows.iter_mut().map(|r| solve(r, &mut mobile)).fold(0.0, f64::max);
+            }
+            for (i, m) in mobile.iter().enumerate() {
+                s.v[i] = m.v.into();
+            }
+            g.drift(s, h);
+            // each rigid body leaves the solve with π = I Rᵀω and turns freely over the substep
+            let rigid = mobile.iter().zip(&poses).enumerate().filter(|(i, _)| g.is_rigid(*i)).map(|p| p.1);
+            for ((m, p), (spin, moments)) in rigid.zip(s.spin.iter_mut().zip(g.moments())) {
+                let pi = (p.rotation.transpose() * m.omega).component_mul(moments);
+                spin[4..].copy_from_slice(pi.as_slice());
+                rigid::free_step(spin, *moments, h);
+            }
+            self.at.potential = g.forces(s, &mut self.at.f)?;
+        }
+        self.iterations.record(self.sweeps * self.substeps, residual);
+        self.keep_warm(&rows);
+        Ok(())
+    }
+
+    fn evaluated(&self) -> &Evaluated {
+        &self.at
+    }
+
+    fn rotates(&self) -> bool {
+        true
+    }
+
+    fn iterations(&self) -> Option<&Iterations> {
+        Some(&self.iterations)
+    }
+}
+
+/// Every body's mobile share at the substep's start (a point mass turns not: zero inverse inertia).
+fn mobiles(g: &LagrangianGraph, s: &State, poses: &[Pose]) -> Vec<Mobile> {
+    let mut spins = s.spin.iter().zip(g.moments());
+    (0..s.x.len())
+        .map(|i| {
+            let (inverse_inertia, omega) = match g.is_rigid(i).then(|| spins.next()).flatten() {
+                Some((spin, moments)) => {
+                    let r = poses[i].rotation;
+                    let inverse = r * Matrix3::from_diagonal(&moments.map(|c| 1.0 / c)) * r.transpose();
+                    (inverse, r * rigid::omega(spin, *moments))
+                }
+                None => (Matrix3::zeros(), V::zeros()),
+            };
+            Mobile { inverse_mass: g.inverse_masses[i], inverse_inertia, v: V::from(s.v[i]), omega }
+        })
+        .collect()
+}
+
+/// One contact's Gauss–Seidel update: the normal impulse clamped to push only, then friction
+/// held inside μλₙ's disc. Returns the normal speed it changed.
+fn solve(r: &mut Row, mobile: &mut [Mobile]) -> f64 {
+    let relative = |mobile: &[Mobile], r: &Row| {
+        mobile[r.touch.b].at(&r.rb) - r.touch.a.map_or(V::zeros(), |a| mobile[a].at(&r.ra))
+    };
+    let speed = relative(mobile, r).dot(&r.dirs[0]);
+    let total = (r.lambda[0] + r.mass[0] * (r.target - speed)).max(0.0);
+    let change = total - r.lambda[0];
+    apply(r, mobile, 0, change);
+    r.lambda[0] = total;
+    let u = relative(mobile, r);
+    let wanted = [1, 2].map(|k| r.lambda[k] - r.mass[k] * u.dot(&r.dirs[k]));
+    let (size, most) = ((wanted[0].powi(2) + wanted[1].powi(2)).sqrt(), r.touch.friction * r.lambda[0]);
+    let scale = if size > most && size > 0.0 { most / size } else { 1.0 };
+    for k in [1, 2] {
+        let total = wanted[k - 1] * scale;
+        apply(r, mobile, k, total - r.lambda[k]);
+        r.lambda[k] = total;
+    }
+    if r.mass[0] > 0.0 {
+        (change / r.mass[0]).abs()
+    } else {
+        0.0
+    }
+}
+
+fn apply(r: &Row, mobile: &mut [Mobile], k: usize, delta: f64) {
+    let p = r.dirs[k] * delta;
+    mobile[r.touch.b].push(&r.rb, &p);
+    if let Some(a) = r.touch.a {
+        mobile[a].push(&r.ra, &-p);
+    }
+}
+
+impl Impulses {
+    /// Each row starts from the impulses of last step's nearest contact of the same pair (within
+    /// twice the margin).
+    fn start_warm(&self, rows: &mut [Row]) {
+        let reach = self.solids.margin * self.solids.margin * 4.0;
+        for r in rows.iter_mut() {
+            let key = (r.touch.a.map_or(usize::MAX, |a| a), r.touch.b);
+            let Some(old) = self.warm.get(&key) else { continue };
+            let near =
+                old.iter().map(|(p, l)| ((p - r.touch.point).norm_squared(), l)).min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((_, lambda)) = near.filter(|n| n.0 <= reach) {
+                r.lambda = *lambda;
+            }
+        }
+    }
+
+    fn keep_warm(&mut self, rows: &[Row]) {
+        self.warm.clear();
+        for r in rows {
+            let key = (r.touch.a.map_or(usize::MAX, |a| a), r.touch.b);
+            self.warm.entry(key).or_default().push((r.touch.point, r.lambda));
+        }
+    }
+}
