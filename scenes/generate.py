@@ -387,7 +387,7 @@ def stack_1000():
         "  floor { y: 0, friction: 0.6 }",
         "  @expect resting { max_speed: 5e-3, after: 3.5, every: 50 }",
         "  @expect no_penetration { tol: 1e-3, every: 50 }",
-        "  solver { dt: 0.005, duration: 4, steps_per_frame: 20 }",
+        "  solver { dt: 0.005, duration: 4, steps_per_frame: 20, iterations: 20 }",
     ]
     write("bench/stack_1000", "// 1,000 blocks under gravity on a rigid floor (the contact solver's benchmark).\n", lines)
 

@@ -246,6 +246,31 @@ mod tests {
         assert_eq!(a.contradiction(&c).unwrap(), "momentum_y: broken by UniformAcceleration, ContactFloor");
     }
 
+    /// Contacts are no terms, but they break what they break: a rigid floor the vertical, its
+    /// friction the horizontal; contacts between solids only the energy (they are inelastic).
+    #[test]
+    fn contacts_break_what_the_floor_and_its_friction_move() {
+        use lagra_checker::model::{Extent, Floor, Solid};
+        let solid = |friction| Body {
+            moments: Some([1.0; 3]),
+            solid: Some(Solid { extent: Extent::Ball(0.5), friction }),
+            ..model(vec![], None).bodies[0].clone()
+        };
+        let solids = |friction, floor| Model { bodies: vec![solid(friction); 2], floor, ..model(vec![], None) };
+        let free = analyse(&solids(0.5, None), Table::derived());
+        assert!(Symmetry::ALL.iter().filter(|&&s| s != Symmetry::Time).all(|&s| broken_by(&free, s).is_empty()));
+        assert_eq!(broken_by(&free, Symmetry::Time), ["the contacts (inelastic)"]);
+        let floored = analyse(&solids(0.5, Some(Floor { y: 0.0, friction: None })), Table::derived());
+        assert_eq!(broken_by(&floored, Symmetry::TranslationY), ["the rigid floor"]);
+        assert_eq!(broken_by(&floored, Symmetry::TranslationX), ["the rigid floor's friction"]);
+        let slippery = analyse(&solids(0.5, Some(Floor { y: 0.0, friction: Some(0.0) })), Table::derived());
+        assert!(
+            broken_by(&slippery, Symmetry::TranslationX).is_empty()
+                && broken_by(&slippery, Symmetry::RotationY).is_empty()
+        );
+        assert_eq!(broken_by(&slippery, Symmetry::RotationX), ["the rigid floor"]);
+    }
+
     #[test]
     fn gravity_alone_keeps_the_horizontal_momenta_and_energy() {
         let a = analyse(&model(vec![term(Kind::UniformAcceleration, &[0.0, -9.8, 0.0])], None), Table::derived());
