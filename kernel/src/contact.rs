@@ -365,6 +365,31 @@ mod tests {
         assert!(c.iter().all(|(q, d)| (q.y - lowest).abs() < 1e-12 && (*d + lowest).abs() < 1e-12));
     }
 
+    proptest::proptest! {
+        /// The floor's contacts do not depend on where along it a body stands or how it is
+        /// turned about the vertical: the same depths, in some order.
+        #[test]
+        fn floor_contacts_are_the_same_anywhere_along_it(
+            tilt in proptest::array::uniform3(-1.0f64..1.0), angle in -1.0f64..1.0, y in 0.3f64..0.9,
+            shift in proptest::array::uniform2(-50.0f64..50.0), yaw in -3.0f64..3.0,
+        ) {
+            let Some(axis) = nalgebra::Unit::try_new(V::from(tilt), 0.1) else { return Ok(()) };
+            let turned = UnitQuaternion::from_axis_angle(&axis, angle);
+            let at = |q: UnitQuaternion<f64>, x: f64, z: f64| {
+                let p = Pose { centre: V::new(x, y, z), rotation: q.to_rotation_matrix().into_inner() };
+                let mut d: Vec<f64> = on_floor(Some(Extent::Cuboid([0.5, 0.3, 0.2])), &p, 0.0, 0.05).iter().map(|c| c.1).collect();
+                d.sort_by(f64::total_cmp);
+                d
+            };
+            let here = at(turned, 0.0, 0.0);
+            let there = at(UnitQuaternion::from_axis_angle(&V::y_axis(), yaw) * turned, shift[0], shift[1]);
+            proptest::prop_assert_eq!(here.len(), there.len());
+            for (a, b) in here.iter().zip(&there) {
+                proptest::prop_assert!((a - b).abs() < 1e-12, "{here:?} {there:?}");
+            }
+        }
+    }
+
     #[test]
     fn a_ball_on_a_box_face_and_beside_its_edge() {
         let poses = [pose([0.0; 3], 0.0), pose([0.0, 0.7, 0.0], 0.0), pose([0.6, 0.6, 0.0], 0.0)];

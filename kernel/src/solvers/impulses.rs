@@ -52,16 +52,14 @@ struct Mobile {
 }
 
 impl Mobile {
-    fn at(&self, r: &V) -> V {
-        self.v + self.omega.cross(r)
+    /// The speed along direction d at a point whose lever arm crossed with d is `arm` (r × d).
+    fn speed(&self, d: &V, arm: &V) -> f64 {
+        d.dot(&self.v) + arm.dot(&self.omega)
     }
-    fn push(&mut self, r: &V, p: &V) {
-        self.v += p * self.inverse_mass;
-        self.omega += self.inverse_inertia * r.cross(p);
-    }
-    /// How much velocity an impulse along n at r makes along n, inverted.
-    fn resistance(&self, r: &V, n: &V) -> f64 {
-        self.inverse_mass + n.dot(&(self.inverse_inertia * r.cross(n)).cross(r))
+    /// An impulse `amount`·d whose angular part, I⁻¹(r × d), is `turn`.
+    fn nudge(&mut self, d: &V, turn: &V, amount: f64) {
+        self.v += d * (amount * self.inverse_mass);
+        self.omega += turn * amount;
     }
 }
 
@@ -72,8 +70,9 @@ struct Row {
     touch: Touch,
     anchors: [V; 2],
     dirs: [V; 3],
-    ra: V,
-    rb: V,
+    /// Per body (a, b) and direction: r × d, and I⁻¹(r × d), the turn an impulse along d makes.
+    arms: [[V; 3]; 2],
+    turns: [[V; 3]; 2],
     mass: [f64; 3],
     target: f64,
     lambda: [f64; 3],
@@ -89,8 +88,8 @@ impl Row {
         Row {
             anchors: [local(touch.a), local(Some(touch.b))],
             dirs: [n, t1, n.cross(&t1)],
-            ra: V::zeros(),
-            rb: V::zeros(),
+            arms: [[V::zeros(); 3]; 2],
+            turns: [[V::zeros(); 3]; 2],
             mass: [0.0; 3],
             target: 0.0,
             lambda: [0.0; 3],
@@ -107,17 +106,25 @@ impl Row {
         // both bodies are pushed at one point, midway between their anchors, so the pair of
         // impulses exerts no net torque: the angular momentum is kept, not only the momentum
         let at = 0.5 * (wa + wb);
-        self.ra = self.touch.a.map_or(V::zeros(), |a| at - poses[a].centre);
-        self.rb = at - poses[self.touch.b].centre;
-        let (a, (ra, rb)) = (self.touch.a, (self.ra, self.rb));
-        self.mass = self.dirs.map(|d| {
-            let k = a.map_or(0.0, |a| mobile[a].resistance(&ra, &d)) + mobile[self.touch.b].resistance(&rb, &d);
-            if k > 0.0 {
-                1.0 / k
+        let bodies = [self.touch.a, Some(self.touch.b)];
+        for (side, body) in bodies.into_iter().enumerate() {
+            let Some(i) = body else { continue };
+            let r = at - poses[i].centre;
+            self.arms[side] = self.dirs.map(|d| r.cross(&d));
+            self.turns[side] = self.arms[side].map(|arm| mobile[i].inverse_inertia * arm);
+        }
+        let mass = |k: usize| {
+            let share = |side: usize| {
+                bodies[side].map_or(0.0, |i| mobile[i].inverse_mass + self.arms[side][k].dot(&self.turns[side][k]))
+            };
+            let resistance = share(0) + share(1);
+            if resistance > 0.0 {
+                1.0 / resistance
             } else {
                 0.0
             }
-        });
+        };
+        self.mass = [mass(0), mass(1), mass(2)];
         let depth = self.touch.depth - self.dirs[0].dot(&(wb - wa));
         self.target = if depth > slop { FEEDBACK * (depth - slop) / h } else { depth.min(0.0) / h };
     }
@@ -199,16 +206,11 @@ fn mobiles(g: &LagrangianGraph, s: &State, poses: &[Pose]) -> Vec<Mobile> {
 /// One contact's Gauss–Seidel update: the normal impulse clamped to push only, then friction
 /// held inside μλₙ's disc. Returns the normal speed it changed.
 fn solve(r: &mut Row, mobile: &mut [Mobile]) -> f64 {
-    let relative = |mobile: &[Mobile], r: &Row| {
-        mobile[r.touch.b].at(&r.rb) - r.touch.a.map_or(V::zeros(), |a| mobile[a].at(&r.ra))
-    };
-    let speed = relative(mobile, r).dot(&r.dirs[0]);
-    let total = (r.lambda[0] + r.mass[0] * (r.target - speed)).max(0.0);
+    let total = (r.lambda[0] + r.mass[0] * (r.target - relative(r, mobile, 0))).max(0.0);
     let change = total - r.lambda[0];
     apply(r, mobile, 0, change);
     r.lambda[0] = total;
-    let u = relative(mobile, r);
-    let wanted = [1, 2].map(|k| r.lambda[k] - r.mass[k] * u.dot(&r.dirs[k]));
+    let wanted = [1, 2].map(|k| r.lambda[k] - r.mass[k] * relative(r, mobile, k));
     let (size, most) = ((wanted[0].powi(2) + wanted[1].powi(2)).sqrt(), r.touch.friction * r.lambda[0]);
     let scale = if size > most && size > 0.0 { most / size } else { 1.0 };
     for k in [1, 2] {
@@ -223,11 +225,17 @@ fn solve(r: &mut Row, mobile: &mut [Mobile]) -> f64 {
     }
 }
 
-fn apply(r: &Row, mobile: &mut [Mobile], k: usize, delta: f64) {
-    let p = r.dirs[k] * delta;
-    mobile[r.touch.b].push(&r.rb, &p);
+/// How fast b moves away from a along direction k at the contact.
+fn relative(r: &Row, mobile: &[Mobile], k: usize) -> f64 {
+    let d = &r.dirs[k];
+    mobile[r.touch.b].speed(d, &r.arms[1][k]) - r.touch.a.map_or(0.0, |a| mobile[a].speed(d, &r.arms[0][k]))
+}
+
+/// An impulse `amount` along direction k: on b, and its opposite on a, at the contact.
+fn apply(r: &Row, mobile: &mut [Mobile], k: usize, amount: f64) {
+    mobile[r.touch.b].nudge(&r.dirs[k], &r.turns[1][k], amount);
     if let Some(a) = r.touch.a {
-        mobile[a].push(&r.ra, &-p);
+        mobile[a].nudge(&r.dirs[k], &r.turns[0][k], -amount);
     }
 }
 
