@@ -1,10 +1,13 @@
-//! Sequential impulses (Catto, GDC 2005–2014; the contact solver of Box2D and Bullet): a step
-//! kicks with the forces, then finds the contact impulses by projected Gauss–Seidel on the
-//! velocity-level complementarity problem — each contact's normal impulse clamped to push only,
-//! its friction to Coulomb's cone μλₙ — warm-started from the last step's impulses, and only
-//! then drifts and turns the bodies with the velocities the contacts allow. Depth beyond a slop
-//! is fed back as a velocity (Baumgarte), and a gap closes at most in one step (speculative
-//! contacts), so resting bodies neither sink nor bounce. Restitution is 0.
+//! Sequential impulses (Catto, GDC 2005–2014; the contact solver of Box2D and Bullet). A step
+//! finds the contacts once, then in each of its substeps kicks with the forces, finds the
+//! contact impulses by projected Gauss–Seidel on the velocity-level complementarity problem —
+//! each contact's normal impulse clamped to push only, its friction to Coulomb's cone μλₙ —
+//! warm-started from the substep before (the first from the last step's impulses), rows from
+//! the highest contact down, and only then drifts and turns the bodies with the velocities the
+//! contacts allow. A contact's depth is followed through the substeps by its anchors on the two
+//! bodies; depth beyond a slop is fed back as a velocity (Baumgarte), and a gap closes at most in
+//! one substep (speculative contacts), so resting bodies neither sink nor bounce. Restitution
+//! is 0.
 //!
 //! Symplectic Euler in free flight (first order), with each rigid body turned exactly by the
 //! free-body splitting (`rigid::free_step`): its spin enters the solve as ω = R π/I and leaves as
