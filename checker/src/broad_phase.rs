@@ -188,20 +188,83 @@ impl<'a> Neighbourhood<'a> {
                         (_, Some(&last)) if last > i => lo + cell.partition_point(|&j| j <= i),
                         _ => return,
                     };
-                    let [px, py, pz] = b.placed.each_ref().map(|p| p[from..hi].chunks(32));
-                    for (((run, xs), ys), zs) in b.members[from..hi].chunks(32).zip(px).zip(py).zip(pz) {
-                        let mut kept = [0u8; 32];
-                        for (((k, x), y), z) in kept.iter_mut().zip(xs).zip(ys).zip(zs) {
-                            *k = u8::from(self.near(i, &[*x, *y, *z]));
-                        }
-                        each_kept(&kept, |k| js.push(run[k]));
-                    }
+                    self.test_run(i, b, from..hi, |j| js.push(j));
                 });
                 js.sort_unstable();
             } else {
                 js.extend((i + 1..self.x.len()).filter(|&j| self.near(i, &self.x[j])));
             }
             f(i, &js);
+        }
+    }
+
+    /// `keep(j)` for each body j, in the grid's order, at places `run` of the bins whose nearest
+    /// image is within reach of body i: a run's tests first (they vectorise), then the passes.
+    #[inline(always)]
+    fn test_run(&self, i: usize, b: &Bins, run: Range<usize>, mut keep: impl FnMut(usize)) {
+        let [px, py, pz] = b.placed.each_ref().map(|p| p[run.clone()].chunks(32));
+        for (((bodies, xs), ys), zs) in b.members[run].chunks(32).zip(px).zip(py).zip(pz) {
+            let mut kept = [0u8; 32];
+            for (((k, x), y), z) in kept.iter_mut().zip(xs).zip(ys).zip(zs) {
+                *k = u8::from(self.near(i, &[*x, *y, *z]));
+            }
+            each_kept(&kept, |k| keep(bodies[k]));
+        }
+    }
+
+    /// How many parts `each_unordered` can split the pairs into: the grid's cells, else the
+    /// bodies.
+    pub fn parts(&self) -> usize {
+        self.bins.as_ref().filter(|_| self.listed.is_none()).map_or(self.x.len(), |b| b.start.len() - 1)
+    }
+
+    /// `f(pairs)` for the pairs within reach whose first body (by a list, the double loop) or
+    /// cell (by the grid) is in `part`, a range of `0..parts()` — every pair within reach once over all
+    /// parts, as (i < j), in batches and in no fixed order: for sums that do not depend on it
+    /// (`ExactSum`). The grid pairs each cell with itself and with the 13 neighbours of its half
+    /// shell (`Grid::half_shell`), which holds every pair of adjacent cells once; the distance
+    /// test is the same, and gives the same answer for (j, i) as for (i, j) (a rounded
+    /// difference, its image and its square are odd or even in it), so the pairs are exactly
+    /// those of `of`.
+    pub fn each_unordered(&self, part: Range<usize>, mut f: impl FnMut(&[Near])) {
+        let mut pairs = vec![];
+        match self.bins.as_ref().filter(|_| self.listed.is_none()) {
+            None => self.each(part, |i, js| {
+                pairs.clear();
+                pairs.extend(js.iter().map(|&j| Near { i, j }));
+                f(&pairs)
+            }),
+            Some(b) => {
+                let (mut shell, mut runs): (Vec<usize>, Vec<Range<usize>>) =
+                    (Vec::with_capacity(13), Vec::with_capacity(13));
+                for m in part {
+                    shell.clear();
+                    b.grid.half_shell(m, |n| shell.push(n));
+                    shell.sort_unstable();
+                    // the shell's bodies as runs of adjacent cells (a column's cells are), the
+                    // cells right after m joined to m's own run
+                    let (mut own_end, mut next) = (b.start[m + 1], m + 1);
+                    runs.clear();
+                    for &n in &shell {
+                        let cell = b.start[n]..b.start[n + 1];
+                        match runs.last_mut() {
+                            _ if n == next => (own_end, next) = (cell.end, next + 1),
+                            Some(run) if run.end == cell.start => *run = run.start..cell.end,
+                            _ => runs.push(cell),
+                        }
+                    }
+                    pairs.clear();
+                    for p in b.start[m]..b.start[m + 1] {
+                        let i = b.members[p];
+                        let mut keep = |j: usize| pairs.push(Near { i: i.min(j), j: i.max(j) });
+                        self.test_run(i, b, p + 1..own_end, &mut keep);
+                        for run in &runs {
+                            self.test_run(i, b, run.clone(), &mut keep);
+                        }
+                    }
+                    f(&pairs);
+                }
+            }
         }
     }
 }
@@ -290,6 +353,28 @@ impl Grid {
         (c[0] * self.n[1] + c[1]) * self.n[2] + c[2]
     }
 
+    /// Visits the neighbours of cell m whose offset (dx, dy, dz) comes after (0, 0, 0) in
+    /// lexicographic order, each once: of two adjacent cells, exactly one is in the other's
+    /// half shell (n ≥ 3 on periodic axes makes the offset from one to the other unique, and
+    /// the offsets of a half shell hold one of each pair d, −d).
+    fn half_shell(&self, m: usize, mut visit: impl FnMut(usize)) {
+        let c = [m / (self.n[1] * self.n[2]), m / self.n[2] % self.n[1], m % self.n[2]];
+        let step = |a: usize, d: isize| {
+            let (k, n) = (c[a] as isize + d, self.n[a] as isize);
+            match (0..n).contains(&k) {
+                true => Some(k as usize),
+                false => self.periodic[a].then_some(k.rem_euclid(n) as usize),
+            }
+        };
+        for d in (-1..=1).flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| [x, y, z]))) {
+            if d > [0, 0, 0] {
+                if let (Some(i), Some(j), Some(k)) = (step(0, d[0]), step(1, d[1]), step(2, d[2])) {
+                    visit(self.index([i, j, k]));
+                }
+            }
+        }
+    }
+
     /// Visits the cell and its neighbours, each once (n ≥ 3 on periodic axes keeps them
     /// distinct).
     fn around(&self, c: [usize; 3], mut visit: impl FnMut(usize)) {
@@ -358,6 +443,13 @@ mod tests {
             let (a, b) = (cut.min(x.len()), (cut + 17).min(x.len()));
             let run: Vec<Near> = found.iter().copied().filter(|p| (a..b).contains(&p.i)).collect();
             prop_assert_eq!(near.of(a..b), run);
+            // and the pairs listed in no order, cell by cell, in any split into parts, are the same
+            let mut unordered = vec![];
+            let split = cut.min(near.parts());
+            near.each_unordered(split..near.parts(), |p| unordered.extend_from_slice(p));
+            near.each_unordered(0..split, |p| unordered.extend_from_slice(p));
+            unordered.sort_by_key(|p| (p.i, p.j));
+            prop_assert_eq!(unordered, found);
         }
     }
 

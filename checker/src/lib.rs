@@ -14,6 +14,7 @@ pub mod claims;
 pub mod cli;
 pub mod decision;
 pub mod enclosure;
+mod exact_sum;
 pub mod model;
 pub mod monitor;
 pub mod mpfi;

@@ -2,12 +2,15 @@
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
 use crate::broad_phase::{Foreseen, Near, Neighbourhood};
+use crate::enclosure::Enclosure;
+use crate::exact_sum::ExactSum;
 use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
 use crate::mpfi::Mpfi;
 use crate::outward::lanes::{Lanes, WIDTH};
 use crate::outward::Outward;
 use crate::real::{cross3, dot3, norm2, sub3, Real, Vec3};
 use crate::terms::{Kind, Shape, Site};
+use rug::float::Round;
 use std::borrow::Cow;
 use std::sync::Arc;
 
@@ -104,18 +107,15 @@ impl<R: PairSum> Lifted<R> {
 
     /// `acc` + Σ `term(n, sites)` over the instances `which` picks (`None` adds nothing), in an order
     /// fixed by the model and the state alone: instances in order; pairs and bonds see each
-    /// other's nearest periodic image; a pair term's pairs, sorted, in chunks: those of the first
-    /// `CHUNK` bodies added to the running sum, those of each later `CHUNK` bodies summed alone
-    /// and then added, so the chunks can be listed and summed on `threads` threads and the bits
-    /// do not depend on how many. `pairs(n, acc, chunk)` adds a chunk of pairs (`one_by_one`, or
-    /// a faster way to the same bits).
+    /// other's nearest periodic image; a pair term's pairs by `pairs(n, acc, near)`, from the
+    /// broad phase's `near` (`in_chunks`, or a way that gives the same bits for any order).
     fn sum<T: Clone + Send + Sync>(
         &self,
         model: &Model,
         which: impl Fn(&TermInstance) -> bool,
-        (mut acc, zero, add): (T, T, impl Fn(T, T) -> T + Sync),
+        (mut acc, add): (T, impl Fn(T, T) -> T + Sync),
         term: impl Fn(usize, &[&Site<R>]) -> Option<T> + Sync,
-        pairs: impl Fn(usize, T, &[Near]) -> T + Sync,
+        pairs: impl Fn(usize, T, &Neighbourhood) -> T,
     ) -> T {
         let fold = |acc: T, each: &mut dyn Iterator<Item = Option<T>>| each.flatten().fold(acc, &add);
         for (n, t) in model.terms.iter().enumerate().filter(|(_, t)| which(t)) {
@@ -127,25 +127,38 @@ impl<R: PairSum> Lifted<R> {
                 }
                 Shape::External if t.sites.is_empty() => acc = fold(acc, &mut self.sites.iter().map(|s| term(n, &[s]))),
                 Shape::External => acc = fold(acc, &mut t.sites.iter().map(|&i| term(n, &[&self.sites[i]]))),
+                // Broad phase: a pair whose nearest image is beyond the term's reach contributes
+                // exactly zero, so leaving it out is exact. The broad phase keeps every pair
+                // within the reach (`asked_reach`), from a grid or a list made ahead, each with
+                // its nearest image.
                 Shape::Pairwise => {
-                    // Broad phase: a pair whose nearest image is beyond the term's reach
-                    // contributes exactly zero, so leaving it out is exact. The broad phase keeps
-                    // every pair within the reach (`asked_reach`), from a grid or a list made
-                    // ahead, in the double loop's order, each with its nearest image.
-                    let near = Neighbourhood::new(&self.x, &self.cell, asked_reach(t), &self.ahead);
-                    let bodies = self.x.len();
-                    let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
-                        let start = if k == 0 { acc.clone() } else { zero.clone() };
-                        pairs(n, start, &near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies)))
-                    });
-                    acc = sums.into_iter().reduce(&add).unwrap_or(acc);
+                    acc = pairs(n, acc, &Neighbourhood::new(&self.x, &self.cell, asked_reach(t), &self.ahead))
                 }
             }
         }
         acc
     }
 
-    /// `pairs` for `sum`: `term` at each pair in turn, added to the running sum.
+    /// `pairs` for `sum`, in the double loop's order: those of the first `CHUNK` bodies added to
+    /// the running sum, those of each later `CHUNK` bodies summed alone (`chunk(n, zero,
+    /// pairs)`) and then added, so that the chunks can be listed and summed on `threads` threads
+    /// and the bits do not depend on how many.
+    fn in_chunks<'s, T: Clone + Send + Sync + 's>(
+        &'s self,
+        (zero, add): (T, impl Fn(T, T) -> T + 's),
+        chunk: impl Fn(usize, T, &[Near]) -> T + Sync + 's,
+    ) -> impl Fn(usize, T, &Neighbourhood) -> T + 's {
+        move |n, acc, near| {
+            let bodies = self.x.len();
+            let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
+                let start = if k == 0 { acc.clone() } else { zero.clone() };
+                chunk(n, start, &near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies)))
+            });
+            sums.into_iter().reduce(&add).unwrap_or(acc)
+        }
+    }
+
+    /// A chunk of pairs for `in_chunks`: `term` at each pair in turn, added to the running sum.
     fn one_by_one<'s, T: 's>(
         &'s self,
         term: &'s (impl Fn(usize, &[&Site<R>]) -> Option<T> + Sync),
@@ -166,16 +179,9 @@ impl<R: PairSum> Lifted<R> {
     }
 
     pub fn potential(&self, model: &Model) -> R {
-        let potentials = |n: usize, acc, pairs: &[Near]| {
-            R::add_potentials(acc, model.terms[n].kind, &self.params[n], pairs.iter().map(|p| self.sites_of(p)))
-        };
-        self.sum(
-            model,
-            |_| true,
-            (self.zero.clone(), self.zero.clone(), R::add),
-            |n, s| Some(model.terms[n].kind.potential(&self.params[n], s)),
-            potentials,
-        )
+        let term = |n: usize, s: &[&Site<R>]| Some(model.terms[n].kind.potential(&self.params[n], s));
+        let pairs = |n: usize, acc: R, near: &Neighbourhood| R::add_potentials(self, acc, model.terms[n].kind, n, near);
+        self.sum(model, |_| true, (self.zero.clone(), R::add), term, pairs)
     }
 
     /// H = T + V (every term of the vocabulary so far has a velocity-independent potential),
@@ -192,13 +198,8 @@ impl<R: PairSum> Lifted<R> {
     pub fn dissipated_power(&self, model: &Model) -> R {
         // only the instances that can dissipate: a conservative term is never visited
         let term = |n: usize, s: &[&Site<R>]| model.terms[n].kind.power(&self.params[n], s);
-        self.sum(
-            model,
-            |t| t.dissipates(),
-            (self.zero.clone(), self.zero.clone(), R::add),
-            term,
-            self.one_by_one(&term, R::add),
-        )
+        let pairs = self.in_chunks((self.zero.clone(), R::add), self.one_by_one(&term, R::add));
+        self.sum(model, |t| t.dissipates(), (self.zero.clone(), R::add), term, pairs)
     }
 
     /// |x_j − x_i|, to the nearest periodic image.
@@ -238,7 +239,8 @@ impl<R: PairSum> Lifted<R> {
         let term = |n: usize, s: &[&Site<R>]| {
             model.terms[n].kind.charge_share(&self.params[n], s).map(|share| share[which].clone())
         };
-        self.sum(model, |t| t.kind.has_charge_share(), (charge, zero, add), term, self.one_by_one(&term, add))
+        let pairs = self.in_chunks((zero, add), self.one_by_one(&term, add));
+        self.sum(model, |t| t.kind.has_charge_share(), (charge, add), term, pairs)
     }
 }
 
@@ -280,20 +282,17 @@ impl<R: Real> Spin<R> {
     }
 }
 
-/// How a pair term's potentials at many pairs are added up: one pair after another, or, for
-/// `Outward`, four pairs at a time in `Lanes`, which gives each pair the same bits.
+/// How a pair term's potentials at all its pairs are added up: one pair after another in the
+/// double loop's order, or, for `Outward`, four pairs at a time in `Lanes` (each pair gets the
+/// same bits as alone) and added exactly in any order (`ExactSum`).
 pub trait PairSum: Real + Send + Sync {
-    /// `acc` + the potential of `kind` (parameters `p`) at each pair, in order.
-    fn add_potentials<'a>(
-        acc: Self,
-        kind: Kind,
-        p: &[Self],
-        pairs: impl Iterator<Item = (&'a Site<Self>, Cow<'a, Site<Self>>)>,
-    ) -> Self
-    where
-        Self: 'a,
-    {
-        pairs.fold(acc, |acc, (a, b)| acc + kind.potential(p, &[a, &b]))
+    /// `acc` + the potential of instance `n` (of `kind`) at each pair `near` holds.
+    fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
+        let p = &l.params[n];
+        let chunk = |_, acc, pairs: &[Near]| {
+            pairs.iter().map(|q| l.sites_of(q)).fold(acc, |acc, (a, b)| acc + kind.potential(p, &[a, &b]))
+        };
+        l.in_chunks((l.zero.clone(), Self::add), chunk)(n, acc, near)
     }
 }
 
@@ -303,33 +302,41 @@ impl PairSum for rug::Float {}
 impl PairSum for Mpfi {}
 
 impl PairSum for Outward {
-    fn add_potentials<'a>(
-        mut acc: Self,
-        kind: Kind,
-        p: &[Self],
-        mut pairs: impl Iterator<Item = (&'a Site<Self>, Cow<'a, Site<Self>>)>,
-    ) -> Self {
-        let wide: Vec<Lanes> = p.iter().map(|c| Lanes::of([*c; WIDTH])).collect();
-        let (reads, mut sites) = (kind.reads(), [Site::filled(Outward::NAN), Site::filled(Outward::NAN)]);
-        loop {
-            let mut n = 0;
-            for (a, b) in pairs.by_ref().take(WIDTH) {
-                sites[0].put(n, a, reads);
-                sites[1].put(n, &b, reads);
-                n += 1;
-            }
-            if n == 0 {
-                return acc;
-            }
-            // the lanes of a short last group keep the sites of the group before (or NaN), and
-            // are dropped
-            for e in &kind.potential(&wide, &[&sites[0], &sites[1]]).lanes()[..n] {
-                acc = acc + *e;
-            }
-            if n < WIDTH {
-                return acc;
-            }
-        }
+    /// Σ lo and Σ hi over the pairs, each exact (`ExactSum`) and rounded once outward: they
+    /// bound the exact sum of the pairs' exact potentials, and their bits do not depend on the
+    /// order the pairs come in, so the broad phase lists them in whatever order is fastest
+    /// (`each_unordered`) and in parts on `threads` threads.
+    fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
+        let wide: Vec<Lanes> = l.params[n].iter().map(|c| Lanes::of([*c; WIDTH])).collect();
+        let parts = near.parts();
+        let pieces = (4 * l.threads).min(parts.max(1));
+        let sums = in_order(pieces, l.threads, |k| {
+            let (mut lo, mut hi, reads) = (ExactSum::default(), ExactSum::default(), kind.reads());
+            let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
+            near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
+                for group in pairs.chunks(WIDTH) {
+                    for (lane, q) in group.iter().enumerate() {
+                        let (a, b) = l.sites_of(q);
+                        sites[0].put(lane, a, reads);
+                        sites[1].put(lane, &b, reads);
+                    }
+                    // the lanes of a short last group keep the sites of the group before (or
+                    // NaN), and are dropped
+                    for e in &kind.potential(&wide, &[&sites[0], &sites[1]]).lanes()[..group.len()] {
+                        let (a, b) = e.bounds();
+                        lo.add(a);
+                        hi.add(b);
+                    }
+                }
+            });
+            (lo, hi)
+        });
+        let (lo, hi) = sums.into_iter().fold((ExactSum::default(), ExactSum::default()), |(mut lo, mut hi), (a, b)| {
+            lo.merge(&a);
+            hi.merge(&b);
+            (lo, hi)
+        });
+        acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
     }
 }
 
@@ -548,20 +555,35 @@ mod tests {
         assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
     }
 
-    /// Four pairs at a time (`PairSum` for `Outward`) adds up the same bits as one pair after
-    /// another, whatever the number of pairs is modulo four.
+    /// Four pairs at a time (`PairSum` for `Outward`), listed in any order and in parts, give
+    /// the bits of each pair's own enclosure (evaluated alone, in the double loop's order) added
+    /// exactly and rounded once — whatever the number of pairs modulo four, by the grid and by
+    /// the double loop (under 64 bodies) — and never a wider sum than adding them one by one.
     #[test]
-    fn pairs_in_lanes_add_up_to_the_same_bits() {
-        let (m, x, v) = liquid();
-        let q = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] }, &Outward::NAN);
-        let (t, p) = (&m.terms[0], &q.params[0]);
-        let pairs = crate::broad_phase::within(&x, &m.cell, asked_reach(t));
-        let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
-        for n in [0, 1, 2, 3, 4, 5, 7, 4001, pairs.len()] {
-            let each = || pairs[..n].iter().map(|p| q.sites_of(p));
+    fn pairs_in_lanes_add_up_to_the_exact_sum_of_each_alone() {
+        let (all, x, v) = liquid();
+        for n in [2, 5, 63, 64, 97, 500, 2197] {
+            let m = Model { bodies: all.bodies[..n].to_vec(), ..all.clone() };
+            let s = Snapshot { step: 0, t: 0.0, x: &x[..n], v: &v[..n], chain: &[], spin: &[] };
+            let q = Lifted::new(&m, &s, &Outward::NAN);
+            let (t, p) = (&m.terms[0], &q.params[0]);
+            let pairs = crate::broad_phase::within(&x[..n], &m.cell, asked_reach(t));
             let start = Outward::point(-1.5);
-            let alone = each().fold(start, |acc, (a, b)| acc + t.kind.potential(p, &[a, &b]));
-            assert_eq!(bits(Outward::add_potentials(start, t.kind, p, each())), bits(alone), "{n} pairs");
+            let (mut lo, mut hi, mut one_by_one) = (ExactSum::default(), ExactSum::default(), start);
+            for (a, b) in pairs.iter().map(|p| q.sites_of(p)) {
+                let e = t.kind.potential(p, &[a, &b]);
+                (lo.add(e.bounds().0), hi.add(e.bounds().1));
+                one_by_one = one_by_one + e;
+            }
+            let want = start + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up));
+            let near = Neighbourhood::new(&x[..n], &m.cell, asked_reach(t), &[]);
+            for threads in [1, 3] {
+                let on = Lifted::new(&m, &s, &Outward::NAN).on_threads(threads);
+                let got = Outward::add_potentials(&on, start, t.kind, 0, &near);
+                let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
+                assert_eq!(bits(got), bits(want), "{n} bodies, {} pairs, {threads} threads", pairs.len());
+                assert!(got.bounds().0 >= one_by_one.bounds().0 && got.bounds().1 <= one_by_one.bounds().1);
+            }
         }
     }
 

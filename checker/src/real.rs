@@ -118,7 +118,7 @@ impl Real for Float {
 /// A point in space as three reals.
 pub type Vec3<R> = [R; 3];
 
-#[inline]
+#[inline(always)]
 pub fn sub3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
     [a[0].clone() - b[0].clone(), a[1].clone() - b[1].clone(), a[2].clone() - b[2].clone()]
 }
@@ -136,7 +136,7 @@ pub fn cross3<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
 }
 
 /// |a|², written with `powi` so that an interval enclosure stays non-negative and tight.
-#[inline]
+#[inline(always)]
 pub fn norm2<R: Real>(a: &Vec3<R>) -> R {
     a[0].clone().powi(2) + a[1].clone().powi(2) + a[2].clone().powi(2)
 }

@@ -7,7 +7,7 @@
 //! cutoff): when they do, `lt` says "undecided" and keeps each lane's answer for the `hull`
 //! that `select` then takes, which gives each lane what `select` would have given it alone.
 
-use super::Outward;
+use super::{down, up, Outward};
 use crate::real::Real;
 use crate::terms::{Reads, Site};
 use std::array::from_fn;
@@ -95,7 +95,43 @@ macro_rules! lane_wise {
         })*
     };
 }
-lane_wise!(Add add, Sub sub, Mul mul, Div div);
+lane_wise!(Add add, Sub sub);
+
+impl Lanes {
+    /// Whether every lane of both is an interval of positive reals with a finite top (so
+    /// none is NaN, and no endpoint quotient is ∞/∞).
+    #[inline(always)]
+    fn positive(&self, o: &Lanes) -> bool {
+        let low = self.lo.iter().chain(&o.lo).fold(true, |all, &l| all & (l > 0.0));
+        low & self.hi.iter().chain(&o.hi).fold(true, |all, &h| all & (h < f64::INFINITY))
+    }
+}
+
+/// × and ÷ of positive intervals (distances, their powers: most of a pair term's products)
+/// without the hull of four: rounding to nearest is monotone, so of the four endpoint results
+/// the least is lo·lo (lo/hi) and the greatest hi·hi (hi/lo), the bits `Outward`'s hull
+/// picks. One branch for all four lanes, which the lanes of a pair term almost always take.
+impl Mul for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn mul(self, o: Lanes) -> Lanes {
+        match self.positive(&o) {
+            true => Lanes { lo: from_fn(|k| down(self.lo[k] * o.lo[k])), hi: from_fn(|k| up(self.hi[k] * o.hi[k])) },
+            false => self.zip(o, Outward::mul),
+        }
+    }
+}
+
+impl Div for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn div(self, o: Lanes) -> Lanes {
+        match self.positive(&o) {
+            true => Lanes { lo: from_fn(|k| down(self.lo[k] / o.hi[k])), hi: from_fn(|k| up(self.hi[k] / o.lo[k])) },
+            false => self.zip(o, Outward::div),
+        }
+    }
+}
 
 impl Neg for Lanes {
     type Output = Lanes;
@@ -175,6 +211,26 @@ mod tests {
     }
 
     proptest! {
+        /// × and ÷ of positive lanes are the bits of `Outward`'s hull of four in each lane,
+        /// from tiny to huge endpoints, and so are those of lanes that are not all positive.
+        #[test]
+        fn positive_products_and_quotients_are_the_hull_of_four(
+            ends in prop::array::uniform4(prop::array::uniform4(prop_oneof![1e-310f64..1e-300, 1e-3f64..1e3, 1e300f64..1e308, -1.0f64..1.0])),
+            positive in any::<bool>(),
+        ) {
+            let lanes = |a: usize| Lanes::of(from_fn(|k| {
+                let end = |e: f64| if positive { e.abs().max(1e-310) } else { e };
+                let (x, y) = (end(ends[k][a]), end(ends[k][a + 1]));
+                Outward::from_bounds(x.min(y), x.max(y))
+            }));
+            let (a, b) = (lanes(0), lanes(2));
+            for (got, op) in [(a * b, Outward::mul as fn(Outward, Outward) -> Outward), (a / b, Outward::div)] {
+                for k in 0..WIDTH {
+                    prop_assert_eq!(bits(got.lanes()[k]), bits(op(a.lanes()[k], b.lanes()[k])));
+                }
+            }
+        }
+
         /// Every pair term's potential at four pairs in lanes is, lane by lane, the same bits
         /// as at each pair alone: pairs within and beyond the cutoff, and at it, mixed.
         #[test]

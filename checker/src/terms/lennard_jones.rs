@@ -11,12 +11,14 @@ pub(super) const PARAMS: &[Param] =
     &[Param::scalar("epsilon", Dim::ENERGY), Param::scalar("sigma", Dim::LENGTH), Param::scalar("cutoff", Dim::LENGTH)];
 
 /// 4ε[(σ²/r²)⁶ − (σ²/r²)³], from r².
+#[inline(always)]
 pub(super) fn lj<R: Real>(eps: &R, sigma: &R, r2: R) -> R {
     let s6 = (sigma.clone().powi(2) / r2).powi(3);
     eps.lift(4.0) * eps.clone() * (s6.clone().powi(2) - s6)
 }
 
 /// `inside(r²)` within the cutoff, zero (as an energy) beyond.
+#[inline(always)]
 pub(super) fn cut<R: Real>(p: &[R], s: &[&Site<R>], rc: R, inside: impl FnOnce(R) -> R) -> R {
     let r2 = norm2(&sub3(&s[1].x, &s[0].x));
     let rc2 = rc.powi(2);
