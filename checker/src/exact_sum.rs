@@ -16,7 +16,7 @@ const EXPONENTS: usize = 2047;
 
 #[derive(Clone)]
 pub struct ExactSum {
-    bins: Vec<i128>,
+    bins: Box<[i128; EXPONENTS]>,
     pos_inf: bool,
     neg_inf: bool,
     nan: bool,
@@ -24,7 +24,7 @@ pub struct ExactSum {
 
 impl Default for ExactSum {
     fn default() -> Self {
-        ExactSum { bins: vec![0; EXPONENTS], pos_inf: false, neg_inf: false, nan: false }
+        ExactSum { bins: Box::new([0; EXPONENTS]), pos_inf: false, neg_inf: false, nan: false }
     }
 }
 
@@ -45,7 +45,7 @@ impl ExactSum {
 
     /// Adds another sum's terms.
     pub fn merge(&mut self, o: &ExactSum) {
-        self.bins.iter_mut().zip(&o.bins).for_each(|(a, b)| *a += b);
+        self.bins.iter_mut().zip(o.bins.iter()).for_each(|(a, b)| *a += b);
         (self.pos_inf, self.neg_inf, self.nan) = (self.pos_inf | o.pos_inf, self.neg_inf | o.neg_inf, self.nan | o.nan);
     }
 

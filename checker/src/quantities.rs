@@ -83,21 +83,23 @@ impl<R: PairSum> Lifted<R> {
         Lifted { ahead, ..self }
     }
 
-    /// Site `j` as seen from site `i`: itself, or in a periodic cell its nearest image,
+    /// Site `j` as seen from site `i`: itself, or in a periodic cell its nearest image
+    /// (`image_of`).
+    fn seen_from(&self, i: usize, j: usize) -> Cow<'_, Site<R>> {
+        match self.image_of(i, j) {
+            Some(x) => Cow::Owned(Site { x, ..self.sites[j].clone() }),
+            None => Cow::Borrowed(&self.sites[j]),
+        }
+    }
+
+    /// Where site `i` sees site `j` when that is not where j is: in a periodic cell, at
     /// x_j − k·L with k chosen from the exact positions (`Cell::shift`) and the shift evaluated
     /// in `R`.
-    fn seen_from(&self, i: usize, j: usize) -> Cow<'_, Site<R>> {
+    #[inline(always)]
+    fn image_of(&self, i: usize, j: usize) -> Option<Vec3<R>> {
         let k = self.images.shift(std::array::from_fn(|a| self.x[j][a] - self.x[i][a]));
-        match &self.cell {
-            Some(c) if k != [0.0; 3] => {
-                let mut s = self.sites[j].clone();
-                for ((x, k), l) in s.x.iter_mut().zip(k).zip(c.size) {
-                    *x = x.clone() - self.zero.lift(k) * self.zero.lift(l);
-                }
-                Cow::Owned(s)
-            }
-            _ => Cow::Borrowed(&self.sites[j]),
-        }
+        let c = self.cell.as_ref().filter(|_| k != [0.0; 3])?;
+        Some(std::array::from_fn(|a| self.sites[j].x[a].clone() - self.zero.lift(k[a]) * self.zero.lift(c.size[a])))
     }
 
     /// Pair `p`: its first site, and its second as seen from the first.
@@ -316,9 +318,9 @@ impl PairSum for Outward {
             near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
                 for group in pairs.chunks(WIDTH) {
                     for (lane, q) in group.iter().enumerate() {
-                        let (a, b) = l.sites_of(q);
-                        sites[0].put(lane, a, reads);
-                        sites[1].put(lane, &b, reads);
+                        let (a, b) = (&l.sites[q.i], &l.sites[q.j]);
+                        sites[0].put(lane, &a.x, a, reads);
+                        sites[1].put(lane, &l.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
                     }
                     // the lanes of a short last group keep the sites of the group before (or
                     // NaN), and are dropped

@@ -8,7 +8,7 @@
 //! that `select` then takes, which gives each lane what `select` would have given it alone.
 
 use super::{down, up, Outward};
-use crate::real::Real;
+use crate::real::{Real, Vec3};
 use crate::terms::{Reads, Site};
 use std::array::from_fn;
 use std::cell::RefCell;
@@ -63,12 +63,13 @@ impl Site<Lanes> {
         Site { x: [l; 3], v: [l; 3], m: l, q: l, colour: [l; 2] }
     }
 
-    /// Site `s` into lane `k`: its position and the fields in `reads` (the others are left as
-    /// they are: filled with NaN, a definition that read them would know nothing).
+    /// Site `s` at position `x` (its own, or a periodic image of it) into lane `k`, with the
+    /// fields in `reads` (the others are left as they are: filled with NaN, a definition that
+    /// read them would know nothing).
     #[inline(always)]
-    pub fn put(&mut self, k: usize, s: &Site<Outward>, reads: Reads) {
+    pub fn put(&mut self, k: usize, x: &Vec3<Outward>, s: &Site<Outward>, reads: Reads) {
         let set = |l: &mut Lanes, o: &Outward| (l.lo[k], l.hi[k]) = (o.lo, o.hi);
-        self.x.iter_mut().zip(&s.x).for_each(|(l, o)| set(l, o));
+        self.x.iter_mut().zip(x).for_each(|(l, o)| set(l, o));
         if reads.v {
             self.v.iter_mut().zip(&s.v).for_each(|(l, o)| set(l, o));
         }
@@ -248,8 +249,8 @@ mod tests {
                 let wide: Vec<Lanes> = params.iter().map(|p| Lanes::of([*p; WIDTH])).collect();
                 let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
                 for (k, other) in others.iter().enumerate() {
-                    sites[0].put(k, &origin, kind.reads());
-                    sites[1].put(k, other, kind.reads());
+                    sites[0].put(k, &origin.x, &origin, kind.reads());
+                    sites[1].put(k, &other.x, other, kind.reads());
                 }
                 let at = kind.potential(&wide, &[&sites[0], &sites[1]]);
                 for (k, lane) in at.lanes().into_iter().enumerate() {
