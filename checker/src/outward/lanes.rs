@@ -179,6 +179,14 @@ impl Real for Lanes {
     /// answer kept for the `hull` that follows.
     #[inline(always)]
     fn lt(&self, bound: &Self) -> Option<bool> {
+        // the common case first, with no branch per lane: every lane decided alike
+        let all = |f: &dyn Fn(usize) -> bool| (0..WIDTH).fold(true, |all, k| all & f(k));
+        if all(&|k| self.hi[k] < bound.lo[k]) {
+            return Some(true);
+        }
+        if all(&|k| self.lo[k] >= bound.hi[k]) {
+            return Some(false);
+        }
         let (a, b) = (self.lanes(), bound.lanes());
         let each: [Option<bool>; WIDTH] = from_fn(|k| a[k].lt(&b[k]));
         if each[0].is_some() && each.iter().all(|c| *c == each[0]) {
