@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# The checker's cost in a run: lj_32k with energy and momentum certified every 100 steps
+# (lj_32k_checked) against the same run without claims (lj_32k_shifted), on one CPU and on two,
+# interleaved so that the machine's drift falls on both alike. Give one binary, or two (A/B:
+# before and after a change; build each with `cargo build --release` and copy it away).
+#
+#     bash bench/checker_cost.sh ROUNDS STEPS BINARY [BINARY...]
+#
+# Prints each wall time, then per binary and CPU count the overhead, fastest against fastest
+# and median against median.
+set -euo pipefail
+rounds=${1:-5}; steps=${2:-100}; shift 2
+out=$(mktemp)
+for cpus in 0 0,1; do
+  for _ in $(seq "$rounds"); do
+    for bin in "$@"; do
+      for s in shifted checked; do
+        t=$(taskset -c $cpus "$bin" run scenes/bench/lj_32k_$s.lagra --steps "$steps" --json |
+          python3 -c "import json,sys; print(json.load(sys.stdin)['wall_s'])")
+        echo "$cpus $bin $s $t" | tee -a "$out"
+      done
+    done
+  done
+done
+python3 - "$out" <<'PY'
+import collections, statistics, sys
+d = collections.defaultdict(list)
+for line in open(sys.argv[1]):
+    cpus, b, s, t = line.split()
+    d[(cpus, b, s)].append(float(t))
+for (cpus, b) in sorted({(c, b) for c, b, _ in d}):
+    c, u = d[(cpus, b, "checked")], d[(cpus, b, "shifted")]
+    print(f"{b} on CPUs {cpus}: overhead {100 * (min(c) / min(u) - 1):.1f}% fastest/fastest, "
+          f"{100 * (statistics.median(c) / statistics.median(u) - 1):.1f}% median/median "
+          f"(without claims {min(u):.3f} s, with {min(c):.3f} s)")
+PY
+rm -f "$out"
