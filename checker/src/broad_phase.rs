@@ -229,11 +229,17 @@ impl<'a> Neighbourhood<'a> {
     pub fn each_unordered(&self, part: Range<usize>, mut f: impl FnMut(&[Near])) {
         let mut pairs = vec![];
         match self.bins.as_ref().filter(|_| self.listed.is_none()) {
-            None => self.each(part, |i, js| {
-                pairs.clear();
-                pairs.extend(js.iter().map(|&j| Near { i, j }));
-                f(&pairs)
-            }),
+            // a few bodies' pairs at a time, so that few groups of four are left short
+            None => {
+                self.each(part, |i, js| {
+                    pairs.extend(js.iter().map(|&j| Near { i, j }));
+                    if pairs.len() >= 256 {
+                        f(&pairs);
+                        pairs.clear();
+                    }
+                });
+                f(&pairs);
+            }
             Some(b) => {
                 let (mut shell, mut runs): (Vec<usize>, Vec<Range<usize>>) =
                     (Vec::with_capacity(13), Vec::with_capacity(13));
