@@ -8,7 +8,8 @@
 //! endpoint is then taken to `up(r)`, a binary64 value above r and so at or above succ(r), each
 //! lower one to `down(r)`, and every exact value of the operation on the enclosed reals lies in
 //! between. Rust evaluates these operations in the default rounding mode and never contracts
-//! them into fused operations. z3 proves both steps over every binary64 operand in its IEEE
+//! them into fused operations; the step outward is one explicit fused multiply-add, rounded
+//! once (`mul_add`: the FMA instruction, with `+fma` in .cargo/config.toml). z3 proves both steps over every binary64 operand in its IEEE
 //! model, the first for + − × ÷ (`checker/proofs/outward.smt2`); the tests below hold every
 //! operation to MPFR over random and extreme operands.
 //!
@@ -18,8 +19,9 @@
 //! (exp, ln, the trigonometric ones) are not correctly rounded in binary64 libraries, so they go
 //! through inari. The operations choose values rather than branch on their operands
 //! (`pick`, `either`), so that four of them side by side (`lanes`) run as vector instructions.
-//! An enclosure nothing is known of (a NaN anywhere, √ of a negative interval) is
-//! `NAN`: every bound it reports is NaN, which the decision never takes for a PASS.
+//! An enclosure nothing is known of (a NaN anywhere, √ of a negative interval, an inner end
+//! that overflowed) is `NAN`: every bound it reports is NaN, which the decision never takes
+//! for a PASS.
 
 use crate::enclosure::Enclosure;
 use crate::real::Real;
@@ -147,28 +149,28 @@ fn most(a: f64, b: f64) -> f64 {
     pick(a > b, a, b)
 }
 
-/// max(|r|·2⁻⁵², 2⁻¹⁰²²): at least the gap from r to either neighbour (an ulp, or the least
-/// subnormal near zero). Never a subnormal operand for a normal r: the floor is the least
-/// *normal* value, and a compare, not an addition, applies it. Intel cores take a microcode
-/// assist of ~40 ns for an addend of 2⁻¹⁰⁷⁴ in an FMA (the step this replaced), which made the
-/// checker four times slower there than on AMD.
-#[inline(always)]
-fn gap(r: f64) -> f64 {
-    most(r.abs() * f64::EPSILON, f64::MIN_POSITIVE)
-}
-
-/// A binary64 value above r, a few neighbours or 2⁻¹⁰²¹ up at most (+∞ stays, −∞ becomes −MAX): above
-/// it, so at or above succ(r), as z3 proves for every binary64 r (`checker/proofs/outward.smt2`).
-/// A few instructions and no branch, where `f64::next_up` tests for NaN, ∞, zero and sign.
+/// A binary64 value above r: r + |r|·2⁻⁵² + 2⁻¹⁰²², rounded once (one fused multiply-add), a
+/// few neighbours or 2⁻¹⁰²¹ up at most. |r|·2⁻⁵² is at least r's ulp, and 2⁻¹⁰²² at least the gap
+/// to a neighbour near zero, so the exact sum is above succ(r) and rounds to a value at or
+/// above it: z3 proves up(r) > r for every finite binary64 r (`checker/proofs/outward.smt2`).
+/// +∞ stays; −∞ gives NaN (∞ − ∞), so an upper end that overflowed to −∞ makes the enclosure
+/// unknown rather than −MAX: sound, and no branch, where `f64::next_up` tests for NaN, ∞, zero
+/// and sign. Three instructions (|r|, the addition of the floor, the FMA), half of what a
+/// floor applied by a compare and the infinities by a test cost, and the operations of a pair
+/// term are mostly these steps. No subnormal operand for |r| ≥ 2⁻¹⁰²¹: the floor is the least
+/// *normal* value. Intel cores take a microcode assist of ~40 ns for a subnormal addend in an
+/// FMA (the step `|r|·2⁻⁵² + 2⁻¹⁰⁷⁴` once did that at every operation, and made the checker
+/// four times slower there than on AMD).
 #[inline(always)]
 fn up(r: f64) -> f64 {
-    pick(r == f64::NEG_INFINITY, -f64::MAX, r + gap(r))
+    r.abs().mul_add(f64::EPSILON, r + f64::MIN_POSITIVE)
 }
 
-/// A binary64 value below r, a few neighbours or 2⁻¹⁰²¹ down at most (−∞ stays, +∞ becomes MAX).
+/// A binary64 value below r: −up(−r), a few neighbours or 2⁻¹⁰²¹ down at most (−∞ stays, +∞
+/// gives NaN).
 #[inline(always)]
 fn down(r: f64) -> f64 {
-    pick(r == f64::INFINITY, f64::MAX, r - gap(r))
+    -r.abs().mul_add(f64::EPSILON, f64::MIN_POSITIVE - r)
 }
 
 impl Add for Outward {
@@ -312,9 +314,15 @@ mod tests {
         Float::with_val(WIDE, x)
     }
 
-    /// [lo, hi] holds every value between `down` and `up` (the exact result rounded both ways).
+    /// [lo, hi] holds every value between `down` and `up` (the exact result rounded both ways),
+    /// or nothing is known (NaN) and an inner end overflowed: `down` above MAX (the lower end
+    /// rounded to +∞, one step down from which is NaN) or `up` below −MAX.
     fn holds(r: Outward, down: &Float, up: &Float) -> bool {
-        !r.is_nan() && Float::with_val(WIDE, r.lo) <= *down && *up <= Float::with_val(WIDE, r.hi)
+        let overflowed = *down > f64::MAX || *up < -f64::MAX;
+        match r.is_nan() {
+            true => overflowed,
+            false => Float::with_val(WIDE, r.lo) <= *down && *up <= Float::with_val(WIDE, r.hi),
+        }
     }
 
     /// The four endpoint combinations of a binary operation, exact or rounded both ways.
@@ -341,17 +349,23 @@ mod tests {
         passes_up(-r) && -down(r) == up(-r)
     }
 
-    /// The hot path's operations meet no subnormal: for every normal r, the step outward adds a
-    /// normal gap (the trap this avoids costs ~40 ns an operation on Intel cores).
+    /// The hot path's operations meet no subnormal: for |r| ≥ 2⁻¹⁰²¹ the step outward's FMA
+    /// multiplies and adds normal values (the trap this avoids costs ~40 ns an operation on
+    /// Intel cores); at zero its addend is the least normal value (only a subnormal r, or one
+    /// within 2⁻¹⁰²² of −2⁻¹⁰²², puts a subnormal into the step).
     #[test]
     fn the_step_outward_adds_no_subnormal() {
-        for r in [f64::MIN_POSITIVE, 1e-300, 1e-200, 1.0, 3.5, 1e300, f64::MAX] {
+        for r in [2.0 * f64::MIN_POSITIVE, 1e-300, 1e-200, 1.0, 3.5, 1e300, f64::MAX] {
             for r in [r, -r] {
-                assert!(gap(r).is_normal(), "{r:e}");
-                assert!(up(r).is_normal() || up(r) == 0.0 || up(r).is_infinite(), "{r:e}");
+                assert!(r.abs().is_normal() && (r + f64::MIN_POSITIVE).is_normal(), "{r:e}");
+                assert!((f64::MIN_POSITIVE - r).is_normal(), "{r:e}");
+                // and the step's result, an operand of the next operation
+                assert!(r.abs() < 1e-300 || !up(r).is_subnormal() && !down(r).is_subnormal(), "{r:e}");
             }
         }
-        assert!(gap(0.0).is_normal() && gap(f64::from_bits(1)).is_normal());
+        for r in [0.0, -0.0] {
+            assert!((r + f64::MIN_POSITIVE).is_normal() && (f64::MIN_POSITIVE - r).is_normal(), "{r:e}");
+        }
     }
 
     /// A binary64 value: any bits (every exponent, subnormals, infinities), or a moderate one.
@@ -405,9 +419,15 @@ mod tests {
             prop_assume!(a.hi.is_finite() && (n >= 0 || a.lo > 0.0));
             let root = |x: f64, r| Float::with_val_round(WIDE, exact(x).sqrt_ref(), r).0;
             prop_assert!(holds(a.sqrt(), &root(a.lo, Round::Down), &root(a.hi, Round::Up)));
-            let pow = |x: f64, r| Float::with_val_round(WIDE, rug::ops::Pow::pow(&exact(x), n), r).0;
+            let pow = |x: f64, n: i32, r| Float::with_val_round(WIDE, rug::ops::Pow::pow(&exact(x), n), r).0;
             let (lo, hi) = if n >= 0 { (a.lo, a.hi) } else { (a.hi, a.lo) };
-            prop_assert!(holds(a.powi(n), &pow(lo, Round::Down), &pow(hi, Round::Up)), "{a:?}^{n} = {:?}", a.powi(n));
+            let p = a.powi(n);
+            // a negative power divides by the positive one, whose lower end may overflow
+            let divisor_overflowed = n < 0 && pow(a.lo, -n, Round::Down) > f64::MAX;
+            prop_assert!(
+                holds(p, &pow(lo, n, Round::Down), &pow(hi, n, Round::Up)) || (p.is_nan() && divisor_overflowed),
+                "{a:?}^{n} = {p:?}"
+            );
         }
 
         /// `up` and `down` pass a value's neighbours, by a few steps, or by at most 2⁻¹⁰²¹ near
@@ -430,7 +450,10 @@ mod tests {
     #[test]
     fn overflow_and_underflow_stay_enclosed() {
         let max = Outward::point(f64::MAX);
-        assert_eq!((max + max).bounds(), (f64::MAX, f64::INFINITY));
+        assert_eq!((max + Outward::point(-1.0)).bounds(), (f64::MAX.next_down().next_down(), f64::INFINITY));
+        // the lower end overflowed too: nothing is known of the sum (sound, if not tight)
+        assert!((max + max).is_nan());
+        assert!((-max - max).is_nan() && (max * max).is_nan());
         let tiny = Outward::point(f64::from_bits(1));
         let t2 = tiny * tiny;
         assert!(t2.lo < 0.0 && t2.hi > 0.0, "{t2:?}");
@@ -487,7 +510,7 @@ mod tests {
         }
         assert_eq!((up(0.0), down(0.0)), (f64::MIN_POSITIVE, -f64::MIN_POSITIVE));
         assert_eq!((up(f64::INFINITY), down(f64::NEG_INFINITY)), (f64::INFINITY, f64::NEG_INFINITY));
-        assert_eq!((up(f64::NEG_INFINITY), down(f64::INFINITY)), (-f64::MAX, f64::MAX));
+        assert!(up(f64::NEG_INFINITY).is_nan() && down(f64::INFINITY).is_nan());
         assert!(up(f64::NAN).is_nan() && down(f64::NAN).is_nan());
     }
 }

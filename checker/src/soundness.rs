@@ -66,12 +66,16 @@ proptest! {
             let params: Vec<f64> = params[..w].iter().zip(&signs).map(|(&p, &s)| if vector && s { -p } else { p }).collect();
             let (iv, iv_f) = eval(kind, &params, &bodies, &Outward::NAN, false);
             let (hp, hp_f) = eval(kind, &params, &bodies, &Float::new(BITS), false);
+            // nothing known (NaN) only where binary64 itself overflows: an inner end past the
+            // range makes the enclosure unknown (`outward::up`)
+            let (point, _) = eval(kind, &params, &bodies, &0.0f64, false);
+            let unknown_allowed = !point.is_finite();
             // constants worked out once give the same bits as worked out in the term
             let (prepared, _) = eval(kind, &params, &bodies, &Outward::NAN, true);
             let bits = |(lo, hi): (f64, f64)| (lo.to_bits(), hi.to_bits());
             prop_assert!(bits(prepared.bounds()) == bits(iv.bounds()), "{kind:?}");
             // where the definition is undefined (FENE past R₀) there is nothing to enclose
-            prop_assert!(hp.is_nan() || inside(iv, &hp), "{kind:?}: {iv:?} does not hold {hp}");
+            prop_assert!(hp.is_nan() || inside(iv, &hp) || unknown_allowed && iv.bounds().0.is_nan(), "{kind:?}: {iv:?} does not hold {hp}");
             if let (Some(a), Some(b)) = (iv_f, hp_f) {
                 prop_assert!(b.is_nan() || inside(a, &b), "{kind:?} dissipation: {a:?} does not hold {b}");
             }
