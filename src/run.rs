@@ -222,6 +222,7 @@ pub fn main(a: Args) -> ExitCode {
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {
             format: certificate::FORMAT.into(),
+            arithmetic: certificate::ARITHMETIC.into(),
             scene: scene.name.clone(),
             source_digest: format!("sha256:{digest}"),
             model: scene.model.clone(),

@@ -98,6 +98,27 @@ fn an_honest_certificate_is_re_derived_identically_every_time() {
 }
 
 #[test]
+fn a_certificate_of_other_checker_arithmetic_is_told_apart() {
+    // written before the revision was recorded (no `arithmetic` field): it still reads, and a
+    // re-check from the states says why its bits cannot be compared
+    let r = oscillator();
+    edit_cert(&r, true, |c| c.arithmetic.clear());
+    assert!(!std::fs::read_to_string(&r.cert).unwrap().contains("\"arithmetic\""));
+    let (code, out, _) = with_states(&r);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("DISAGREES with the certificate: the marks were computed in an earlier checker arithmetic"),
+        "{out}"
+    );
+    edit_cert(&r, true, |c| c.arithmetic = "2020-01-01".into());
+    let (_, out, _) = with_states(&r);
+    assert!(out.contains("computed in checker arithmetic 2020-01-01, this checker's is"), "{out}");
+    // the decision alone does not depend on the arithmetic
+    let (code, out, _) = check(&[&r.cert]);
+    assert_eq!(code, 0, "{out}");
+}
+
+#[test]
 fn a_state_moved_by_one_ulp_is_caught() {
     let r = oscillator();
     edit_states(&r, false, |b| {

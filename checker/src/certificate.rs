@@ -11,6 +11,13 @@ use serde::{Deserialize, Serialize};
 
 pub const FORMAT: &str = "lagra-certificate/1";
 
+/// The revision of the checker's arithmetic (its enclosures' every bit: the rounding step, the
+/// order and exactness of sums) that a certificate's marks were computed in. A re-check
+/// re-derives the marks bit for bit only in the same; a change that moves any bit of an
+/// enclosure gets a new name (`tests::the_arithmetic_revision_names_these_bits` holds one
+/// enclosure's bits to this name, and fails until both are updated).
+pub const ARITHMETIC: &str = "2026-11-26";
+
 /// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, the tolerance it was held to
 /// (declared, or the round-off budget at that step) and the precision that produced the
 /// enclosure. Written as `[step, lo, hi, tol, precision]`; the numbers as exact binary64 JSON
@@ -93,6 +100,10 @@ pub struct Run {
 #[serde(deny_unknown_fields)]
 pub struct Certificate {
     pub format: String,
+    /// `ARITHMETIC` of the checker that wrote it; empty (and absent from the JSON) in
+    /// certificates written before it was recorded.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub arithmetic: String,
     pub scene: String,
     /// `sha256:` and the digest of the scene's source text, as the front computed it.
     pub source_digest: String,
@@ -167,6 +178,44 @@ impl Certificate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::{Body, Snapshot, TermInstance, UnitSystem};
+    use crate::monitor::Monitor;
+    use crate::terms::Kind;
+
+    /// An energy mark of a small scene (Lennard-Jones pairs, a bond, kinetic energy) at its
+    /// second state: if any bit of it moves, the checker's arithmetic changed, and `ARITHMETIC`
+    /// must get a new name along with the bits written here (certificates of the old name can
+    /// then no longer be re-checked to the bit, and `recheck` says why).
+    #[test]
+    fn the_arithmetic_revision_names_these_bits() {
+        let body = Body { mass: 1.5, charge: 0.0, colour: [0.0; 2], moments: None, solid: None };
+        let model = Model {
+            units: UnitSystem::Reduced,
+            cell: None,
+            bodies: vec![body; 5],
+            terms: vec![
+                TermInstance { kind: Kind::LennardJones, sites: vec![], params: vec![1.0, 1.0, 2.5] },
+                TermInstance { kind: Kind::HarmonicBond, sites: vec![0, 1], params: vec![30.0, 1.1, 0.0] },
+            ],
+            constraints: vec![],
+            thermostat: None,
+            floor: None,
+        };
+        let claims = vec![Claim::new(ClaimKind::EnergyConservation, Some(1e-3), 1)];
+        let mut monitor = Monitor::new(model, claims, 1).unwrap();
+        let x = |d: f64| [[0.0, 0.0, 0.0], [1.1 + d, 0.1, 0.0], [0.3, 1.2, -0.1], [1.4, 1.1, 0.9], [-0.8, 0.6, 1.3]];
+        let v = [[0.1, -0.2, 0.3], [0.0, 0.5, -0.1], [-0.3, 0.1, 0.2], [0.2, 0.2, -0.4], [0.0, -0.3, 0.1]];
+        for (step, d) in [(0, 0.0), (1, 1e-4)] {
+            let x = x(d);
+            let s = Snapshot { step, t: step as f64 * 0.01, x: &x, v: &v, chain: &[], spin: &[] };
+            monitor.observe(&s).unwrap();
+        }
+        let mark = monitor.finish().trails[0].marks[0];
+        assert_eq!(mark.step, 1);
+        let bits = (mark.lo.to_bits(), mark.hi.to_bits());
+        assert_eq!(bits, (0x3ee6_4c9e_2836_f20f, 0x3ee6_4c9e_2a90_f429), "the arithmetic moved: name a new ARITHMETIC");
+        assert_eq!(ARITHMETIC, "2026-11-26");
+    }
 
     #[test]
     fn marks_round_trip_through_json_exactly() {

@@ -2,7 +2,7 @@
 //! given (every enclosure evaluated again), or else from the recorded enclosures (the decision
 //! made again, the enclosures taken on trust).
 
-use crate::certificate::{Certificate, Trail};
+use crate::certificate::{Certificate, Trail, ARITHMETIC};
 use crate::checksum::label;
 use crate::claims::ClaimKind;
 use crate::decision::{decide_static, Judge, Verdict};
@@ -31,6 +31,16 @@ pub fn recheck(c: &Certificate, states: Option<&States>) -> Result<Recheck, Stri
     let verdicts = match states {
         Some(s) => {
             let (verdicts, trails) = replay(c, s)?;
+            if c.arithmetic != ARITHMETIC {
+                let theirs = match c.arithmetic.as_str() {
+                    "" => "an earlier checker arithmetic (not recorded before 2026-11-26)".to_string(),
+                    named => format!("checker arithmetic {named}"),
+                };
+                disagreements.push(format!(
+                    "the marks were computed in {theirs}, this checker's is {ARITHMETIC}: enclosures re-derived \
+                     in other arithmetic do not agree to the bit; re-check with the lagra-check that wrote it"
+                ));
+            }
             compare_trails(&c.trails, &trails, &mut disagreements);
             verdicts
         }

@@ -3,7 +3,7 @@
 //! 1024-bit value shows to exceed the tolerance, and the certificate reader never panics.
 #![cfg(test)]
 
-use crate::certificate::{Certificate, Run, FORMAT};
+use crate::certificate::{Certificate, Run, ARITHMETIC, FORMAT};
 use crate::claims::{Claim, ClaimKind};
 use crate::decision::Verdict;
 use crate::enclosure::Enclosure;
@@ -154,6 +154,7 @@ fn certificate() -> String {
     let out = mon.finish();
     Certificate {
         format: FORMAT.into(),
+        arithmetic: ARITHMETIC.into(),
         scene: "s".into(),
         source_digest: "sha256:0".into(),
         model: m,
