@@ -116,6 +116,15 @@ struct Bins {
     placed: [Vec<f64>; 3],
 }
 
+impl Bins {
+    /// Appends cell n's bodies and their positions.
+    fn copy_cell(&self, n: usize, bodies: &mut Vec<usize>, placed: &mut [Vec<f64>; 3]) {
+        let cell = self.start[n]..self.start[n + 1];
+        bodies.extend_from_slice(&self.members[cell.clone()]);
+        placed.iter_mut().zip(&self.placed).for_each(|(to, from)| to.extend_from_slice(&from[cell.clone()]));
+    }
+}
+
 impl<'a> Neighbourhood<'a> {
     /// The bodies at `x` binned for `reach`, unless one of the lists made `ahead` holds.
     pub fn new(x: &'a [[f64; 3]], cell: &'a Option<Cell>, reach: Option<f64>, ahead: &'a [Foreseen]) -> Self {
@@ -188,7 +197,7 @@ impl<'a> Neighbourhood<'a> {
                         (_, Some(&last)) if last > i => lo + cell.partition_point(|&j| j <= i),
                         _ => return,
                     };
-                    self.test_run(i, b, from..hi, |j| js.push(j));
+                    self.test_run(i, &b.members[from..hi], b.placed.each_ref().map(|p| &p[from..hi]), |j| js.push(j));
                 });
                 js.sort_unstable();
             } else {
@@ -198,12 +207,13 @@ impl<'a> Neighbourhood<'a> {
         }
     }
 
-    /// `keep(j)` for each body j, in the grid's order, at places `run` of the bins whose nearest
-    /// image is within reach of body i: a run's tests first (they vectorise), then the passes.
+    /// `keep(j)` for each body j of `bodies` (placed at `xs`, `ys`, `zs`), in their order,
+    /// whose nearest image is within reach of body i: a run's tests first (they vectorise),
+    /// then the passes.
     #[inline(always)]
-    fn test_run(&self, i: usize, b: &Bins, run: Range<usize>, mut keep: impl FnMut(usize)) {
-        let [px, py, pz] = b.placed.each_ref().map(|p| p[run.clone()].chunks(32));
-        for (((bodies, xs), ys), zs) in b.members[run].chunks(32).zip(px).zip(py).zip(pz) {
+    fn test_run(&self, i: usize, bodies: &[usize], [xs, ys, zs]: [&[f64]; 3], mut keep: impl FnMut(usize)) {
+        let chunks = bodies.chunks(32).zip(xs.chunks(32)).zip(ys.chunks(32)).zip(zs.chunks(32));
+        for (((bodies, xs), ys), zs) in chunks {
             let mut kept = [0u8; 32];
             for (((k, x), y), z) in kept.iter_mut().zip(xs).zip(ys).zip(zs) {
                 *k = u8::from(self.near(i, &[*x, *y, *z]));
@@ -212,10 +222,15 @@ impl<'a> Neighbourhood<'a> {
         }
     }
 
+    /// The bins, unless a list made ahead is used instead.
+    fn grid(&self) -> Option<&Bins> {
+        self.bins.as_ref().filter(|_| self.listed.is_none())
+    }
+
     /// How many parts `each_unordered` can split the pairs into: the grid's cells, else the
     /// bodies.
     pub fn parts(&self) -> usize {
-        self.bins.as_ref().filter(|_| self.listed.is_none()).map_or(self.x.len(), |b| b.start.len() - 1)
+        self.grid().map_or(self.x.len(), |b| b.start.len() - 1)
     }
 
     /// `f(pairs)` for the pairs within reach whose first body (by a list, the double loop) or
@@ -228,7 +243,7 @@ impl<'a> Neighbourhood<'a> {
     /// those of `of`.
     pub fn each_unordered(&self, part: Range<usize>, mut f: impl FnMut(&[Near])) {
         let mut pairs = vec![];
-        match self.bins.as_ref().filter(|_| self.listed.is_none()) {
+        match self.grid() {
             // a few bodies' pairs at a time, so that few groups of four are left short
             None => {
                 self.each(part, |i, js| {
@@ -241,32 +256,18 @@ impl<'a> Neighbourhood<'a> {
                 f(&pairs);
             }
             Some(b) => {
-                let (mut shell, mut runs): (Vec<usize>, Vec<Range<usize>>) =
-                    (Vec::with_capacity(13), Vec::with_capacity(13));
+                // cell m's bodies and then its half shell's, side by side: one run to test
+                // each of m's bodies against, instead of one per neighbouring cell
+                let (mut near, mut placed): (Vec<usize>, [Vec<f64>; 3]) = Default::default();
                 for m in part {
-                    shell.clear();
-                    b.grid.half_shell(m, |n| shell.push(n));
-                    shell.sort_unstable();
-                    // the shell's bodies as runs of adjacent cells (a column's cells are), the
-                    // cells right after m joined to m's own run
-                    let (mut own_end, mut next) = (b.start[m + 1], m + 1);
-                    runs.clear();
-                    for &n in &shell {
-                        let cell = b.start[n]..b.start[n + 1];
-                        match runs.last_mut() {
-                            _ if n == next => (own_end, next) = (cell.end, next + 1),
-                            Some(run) if run.end == cell.start => *run = run.start..cell.end,
-                            _ => runs.push(cell),
-                        }
-                    }
+                    near.clear();
+                    placed.iter_mut().for_each(Vec::clear);
+                    b.copy_cell(m, &mut near, &mut placed);
+                    b.grid.half_shell(m, |n| b.copy_cell(n, &mut near, &mut placed));
                     pairs.clear();
-                    for p in b.start[m]..b.start[m + 1] {
-                        let i = b.members[p];
-                        let mut keep = |j: usize| pairs.push(Near { i: i.min(j), j: i.max(j) });
-                        self.test_run(i, b, p + 1..own_end, &mut keep);
-                        for run in &runs {
-                            self.test_run(i, b, run.clone(), &mut keep);
-                        }
+                    for (q, &i) in b.members[b.start[m]..b.start[m + 1]].iter().enumerate() {
+                        let after = placed.each_ref().map(|p| &p[q + 1..]);
+                        self.test_run(i, &near[q + 1..], after, |j| pairs.push(Near { i: i.min(j), j: i.max(j) }));
                     }
                     f(&pairs);
                 }
