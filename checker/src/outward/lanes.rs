@@ -99,26 +99,43 @@ macro_rules! lane_wise {
 lane_wise!(Add add, Sub sub);
 
 impl Lanes {
-    /// Whether every lane of both is an interval of positive reals with a finite top (so
-    /// none is NaN, and no endpoint quotient is ∞/∞).
+    /// Whether every lane is an interval of positive reals with a finite top (so none is NaN,
+    /// and no endpoint quotient is ∞/∞ nor product 0·∞).
     #[inline(always)]
-    fn positive(&self, o: &Lanes) -> bool {
-        let low = self.lo.iter().chain(&o.lo).fold(true, |all, &l| all & (l > 0.0));
-        low & self.hi.iter().chain(&o.hi).fold(true, |all, &h| all & (h < f64::INFINITY))
+    fn positive(&self) -> bool {
+        let low = self.lo.iter().fold(true, |all, &l| all & (l > 0.0));
+        low & self.hi.iter().fold(true, |all, &h| all & (h < f64::INFINITY))
+    }
+
+    /// Whether every lane has ordered ends (so none is NaN).
+    #[inline(always)]
+    fn ordered(&self) -> bool {
+        self.lo.iter().zip(&self.hi).fold(true, |all, (l, h)| all & (l <= h))
     }
 }
 
 /// × and ÷ of positive intervals (distances, their powers: most of a pair term's products)
 /// without the hull of four: rounding to nearest is monotone, so of the four endpoint results
 /// the least is lo·lo (lo/hi) and the greatest hi·hi (hi/lo), the bits `Outward`'s hull
-/// picks. One branch for all four lanes, which the lanes of a pair term almost always take.
+/// picks. A positive interval times any ordered one (a strength times an energy of either
+/// sign) likewise: the least is lo·b.lo if b.lo ≥ 0, else hi·b.lo, the greatest hi·b.hi if
+/// b.hi ≥ 0, else lo·b.hi (a positive finite factor makes no 0·∞). One branch for all four
+/// lanes, which the lanes of a pair term almost always take.
 impl Mul for Lanes {
     type Output = Lanes;
     #[inline(always)]
     fn mul(self, o: Lanes) -> Lanes {
-        match self.positive(&o) {
-            true => Lanes { lo: from_fn(|k| down(self.lo[k] * o.lo[k])), hi: from_fn(|k| up(self.hi[k] * o.hi[k])) },
-            false => self.zip(o, Outward::mul),
+        let times = |a: &Lanes, b: &Lanes| Lanes {
+            lo: from_fn(|k| down(if b.lo[k] >= 0.0 { a.lo[k] * b.lo[k] } else { a.hi[k] * b.lo[k] })),
+            hi: from_fn(|k| up(if b.hi[k] >= 0.0 { a.hi[k] * b.hi[k] } else { a.lo[k] * b.hi[k] })),
+        };
+        match (self.positive(), o.positive()) {
+            (true, true) => {
+                Lanes { lo: from_fn(|k| down(self.lo[k] * o.lo[k])), hi: from_fn(|k| up(self.hi[k] * o.hi[k])) }
+            }
+            (true, false) if o.ordered() => times(&self, &o),
+            (false, true) if self.ordered() => times(&o, &self),
+            _ => self.zip(o, Outward::mul),
         }
     }
 }
@@ -127,7 +144,7 @@ impl Div for Lanes {
     type Output = Lanes;
     #[inline(always)]
     fn div(self, o: Lanes) -> Lanes {
-        match self.positive(&o) {
+        match self.positive() & o.positive() {
             true => Lanes { lo: from_fn(|k| down(self.lo[k] / o.hi[k])), hi: from_fn(|k| up(self.hi[k] / o.lo[k])) },
             false => self.zip(o, Outward::div),
         }
@@ -220,15 +237,18 @@ mod tests {
     }
 
     proptest! {
-        /// × and ÷ of positive lanes are the bits of `Outward`'s hull of four in each lane,
-        /// from tiny to huge endpoints, and so are those of lanes that are not all positive.
+        /// × and ÷ of lanes are the bits of `Outward`'s hull of four in each lane, from tiny to
+        /// huge endpoints, zeros and infinities: both factors positive, one of them, or neither.
         #[test]
         fn positive_products_and_quotients_are_the_hull_of_four(
-            ends in prop::array::uniform4(prop::array::uniform4(prop_oneof![1e-310f64..1e-300, 1e-3f64..1e3, 1e300f64..1e308, -1.0f64..1.0])),
-            positive in any::<bool>(),
+            ends in prop::array::uniform4(prop::array::uniform4(prop_oneof![
+                1e-310f64..1e-300, 1e-3f64..1e3, 1e300f64..1e308, -1.0f64..1.0, -1e3f64..-1e-3,
+                Just(0.0), Just(-0.0), Just(f64::INFINITY), Just(f64::NEG_INFINITY)
+            ])),
+            positive in any::<[bool; 2]>(),
         ) {
             let lanes = |a: usize| Lanes::of(from_fn(|k| {
-                let end = |e: f64| if positive { e.abs().max(1e-310) } else { e };
+                let end = |e: f64| if positive[a / 2] { e.abs().clamp(1e-310, f64::MAX) } else { e };
                 let (x, y) = (end(ends[k][a]), end(ends[k][a + 1]));
                 Outward::from_bounds(x.min(y), x.max(y))
             }));
