@@ -130,10 +130,7 @@ impl Mul for Lanes {
             hi: from_fn(|k| up(if b.hi[k] >= 0.0 { a.hi[k] * b.hi[k] } else { a.lo[k] * b.hi[k] })),
         };
         match (self.positive(), o.positive()) {
-            (true, true) => {
-                Lanes { lo: from_fn(|k| down(self.lo[k] * o.lo[k])), hi: from_fn(|k| up(self.hi[k] * o.hi[k])) }
-            }
-            (true, false) if o.ordered() => times(&self, &o),
+            (true, b) if b || o.ordered() => times(&self, &o),
             (false, true) if self.ordered() => times(&o, &self),
             _ => self.zip(o, Outward::mul),
         }
