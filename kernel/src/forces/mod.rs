@@ -1,12 +1,13 @@
 //! Fast, hand-derived forces. A term supplies one `eval` for one instance — of `Bonded` (listed
 //! bodies), `Paired` (every pair, on the displacement) or `Field` (each body alone) — and
-//! `groups` loops over the instances in flat arrays, monomorphized per term. They never call the
+//! `groups` and `pairs` loop over the instances in flat arrays, monomorphized per term. They never call the
 //! checker's generic definitions; tests hold the two together (forces = −∇V − ∂F/∂v to
 //! round-off, energies equal).
 
 mod clusters;
 pub mod derivative;
 mod groups;
+mod pairs;
 
 mod contact_floor;
 mod coulomb;
@@ -37,10 +38,11 @@ pub(crate) mod dual;
 use crate::state::State;
 use crate::step::Stride;
 use derivative::{Adjoint, Direction, Wanted};
-use groups::{Bonds, Fields, Pairs};
+use groups::{Bonds, Fields};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
 use lanes::Lane;
+use pairs::Pairs;
 use std::fmt;
 
 /// A configuration where a term's force is undefined (bodies at one point, a bond stretched past

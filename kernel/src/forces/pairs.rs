@@ -1,0 +1,386 @@
+//! Pair terms: over all pairs of a few bodies, or over a Verlet list of clusters, split by
+//! body into a fixed number of chunks so the sums are the same bits on any number of threads.
+
+use super::clusters;
+use super::derivative::{coincident, Adjoint, Direction, PairDerivative, Wanted};
+use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
+use super::lanes::F64x4;
+use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
+use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
+use crate::step::Stride;
+use crate::sum::Sum;
+use crate::traverse;
+use lagra_checker::model::{Cell, Model, TermInstance};
+use lagra_checker::terms::Kind;
+use rayon::prelude::*;
+use std::marker::PhantomData;
+use std::sync::Mutex;
+
+pub struct Pairs<T: Paired> {
+    name: &'static str,
+    kind: Kind,
+    /// Each instance's place in the model, and its parameters as written (the derivatives
+    /// evaluate the definition on them).
+    terms: Vec<usize>,
+    params: Rows,
+    /// Each instance's constants (`Paired::row`).
+    rows: Vec<T::Row>,
+    cell: Option<Cell>,
+    /// The farthest any row reaches, if every row's reach is finite (then a cell list applies).
+    reach: Option<f64>,
+    /// For a finite reach on enough bodies in a big enough box: the Verlet list, kept between
+    /// steps (a lock, since forces are evaluated through a shared reference).
+    list: Option<Mutex<Neighbours>>,
+    pool: Pool,
+    term: PhantomData<T>,
+}
+
+/// Below this many bodies a pair term loops over every pair: as fast, and nothing to keep.
+const LIST_FROM: usize = 64;
+
+/// From this many bodies the listed pairs are split into `CHUNKS` parts by body, each summing
+/// its forces into its own buffer, the buffers then added in order: the same bits for any number
+/// of threads, since the split depends on the list alone.
+const SPLIT_FROM: usize = 4096;
+const CHUNKS: usize = 4;
+
+impl<T: Paired + Send + Sync + 'static> Pairs<T> {
+    pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
+        let reach = t.iter().map(|t| kind.reach(&t.1.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
+        let list = reach
+            .filter(|_| (LIST_FROM..Pair::CLUSTERS).contains(&m.bodies.len()))
+            .and_then(|r| Neighbours::new(&m.cell, r))
+            .map(Mutex::new);
+        let rows = t.iter().map(|t| T::row(&t.1.params)).collect();
+        Box::new(Pairs::<T> {
+            name: kind.name(),
+            kind,
+            terms: t.iter().map(|t| t.0).collect(),
+            params: Rows::new(kind, t),
+            rows,
+            cell: m.cell,
+            reach,
+            list,
+            pool: pool.clone(),
+            term: PhantomData,
+        })
+    }
+
+    /// The virial −Σ d·F over the listed pairs within the cutoff, in list order (each pair's
+    /// eval gives zero beyond it), compensated.
+    fn listed_virial(&self, l: &Neighbours, s: &Frame) -> Result<f64, Singularity> {
+        let mut w = Sum::default();
+        for p in &self.rows {
+            l.each_pair(|i, j, d| {
+                let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j)).map_err(|what| Singularity {
+                    term: self.name,
+                    bodies: vec![i, j],
+                    what,
+                })?;
+                w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+                Ok(())
+            })?;
+        }
+        Ok(w.value())
+    }
+
+    /// Through the cluster-pair list (`clusters::kernel`), the i-clusters split into chunks of
+    /// about equal pair counts, each summing into its own buffer; the buffers are added in order
+    /// and then given back to the bodies. The split depends on the list alone: the same bits on
+    /// any number of threads.
+    fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
+        let n = l.clusters();
+        let chunks = if s.x.len() >= SPLIT_FROM { CHUNKS } else { 1 };
+        let total = l.count();
+        let bounds: Vec<usize> = (0..=chunks)
+            .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
+            .collect();
+        let traits = clusters::traits::<T>(l, s);
+        let mut buffers = vec![vec![[F64x4::default(); 3]; n]; chunks];
+        // (two bodies at one point make the forces non-finite: `accumulate` then names them)
+        let work = |(c, buffer): (usize, &mut Vec<Cluster>)| {
+            let mut sum = Sum::default();
+            for row in &self.rows {
+                let range = bounds[c]..bounds[c + 1];
+                sum.merge(match energy {
+                    true => clusters::kernel::<T, true>(l, row, &traits, range, buffer),
+                    false => clusters::kernel::<T, false>(l, row, &traits, range, buffer),
+                });
+            }
+            sum
+        };
+        let sums: Vec<Sum> = match &self.pool {
+            Some(pool) if chunks > 1 => pool.install(|| buffers.par_iter_mut().enumerate().map(work).collect()),
+            _ => buffers.iter_mut().enumerate().map(work).collect(),
+        };
+        let (first, rest) = buffers.split_first_mut().expect("one chunk at least");
+        for b in rest {
+            for (fi, bi) in first.iter_mut().zip(b.iter()) {
+                for c in 0..3 {
+                    fi[c] = fi[c] + bi[c];
+                }
+            }
+        }
+        for (slot, &b) in l.bodies.iter().enumerate() {
+            if b != EMPTY {
+                let cluster = &first[slot / LANES];
+                for c in 0..3 {
+                    f[b as usize][c] += cluster[c].lane(slot % LANES);
+                }
+            }
+        }
+        let mut energy = Sum::default();
+        for part in sums {
+            energy.merge(part);
+        }
+        Ok(energy.value())
+    }
+
+    /// Each instance's derivative, gathering what `wanted` names.
+    fn derivatives_for(&self, wanted: &Wanted) -> Vec<PairDerivative<'_>> {
+        (0..self.terms.len())
+            .map(|k| {
+                let t = self.terms[k];
+                PairDerivative::new(self.kind, self.params.row(k), t, wanted.of(t))
+            })
+            .collect()
+    }
+
+    fn derivatives(&self, w: (&[usize], bool, bool)) -> Vec<PairDerivative<'_>> {
+        (0..self.terms.len()).map(|k| PairDerivative::new(self.kind, self.params.row(k), self.terms[k], w)).collect()
+    }
+
+    /// Whether every instance has a hand-derived jet (and the term reads no masses or charges,
+    /// whose derivatives jets leave out).
+    fn jets_everywhere(&self, each: &[PairDerivative]) -> bool {
+        !T::BODIES
+            && !T::COLOUR
+            && each.iter().enumerate().all(|(k, pd)| T::jet(&self.rows[k], pd.p, 0.25 * pd.reach2.min(1e300)).is_some())
+    }
+
+    /// The pullback through the cluster-pair list with the hand-derived jets: each instance's
+    /// parameters' adjoints in one sum, the positions' added pair by pair.
+    fn listed_pullback(&self, l: &Neighbours, g: &[[f64; 3]], each: &[PairDerivative], out: &mut Adjoint) {
+        for (k, pd) in each.iter().enumerate() {
+            let (row, p) = (&self.rows[k], pd.p);
+            let wanted: Vec<usize> = pd.which().iter().copied().filter(|&w| w < p.len()).collect();
+            let mut params = [0.0; 3];
+            let _ = l.each_pair::<()>(|i, j, d| {
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let Some(jet) = (r2 < pd.reach2).then(|| T::jet(row, p, r2)).flatten() else { return Ok(()) };
+                let dg = [g[i][0] - g[j][0], g[i][1] - g[j][1], g[i][2] - g[j][2]];
+                let a = dg[0] * d[0] + dg[1] * d[1] + dg[2] * d[2];
+                for c in 0..3 {
+                    let w = jet.s * dg[c] + jet.s_r * a * d[c];
+                    out.x[j][c] += w;
+                    out.x[i][c] -= w;
+                }
+                for &w in &wanted {
+                    params[w] += jet.ds[w] * a;
+                }
+                Ok(())
+            });
+            for &w in &wanted {
+                out.params[pd.term][w] += params[w];
+            }
+        }
+    }
+
+    /// Instance k's hand-derived jet at d, for a term that reads neither masses nor charges
+    /// (whose jets say nothing of them) and a pair inside its own reach.
+    #[inline]
+    fn jet(&self, k: usize, d: &[f64; 3], reach2: f64) -> Option<super::Jet> {
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if T::BODIES || T::COLOUR || r2 >= reach2 {
+            return None;
+        }
+        T::jet(&self.rows[k], self.params.row(k), r2)
+    }
+
+    /// Each pair within reach, as the force loop sees it — through the Verlet list when there is
+    /// one (brought up to date), else every pair or a cell list — with its displacement.
+    fn within_reach(
+        &self,
+        s: &Frame,
+        mut visit: impl FnMut(usize, usize, [f64; 3]) -> Result<(), Singularity>,
+    ) -> Result<(), Singularity> {
+        let near = |d: &[f64; 3]| {
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            self.reach.is_none_or(|r| r2 <= r * r)
+        };
+        let Some(list) = &self.list else {
+            return traverse::pairs(
+                s.x,
+                &self.cell,
+                self.reach,
+                |i, j, d| if near(&d) { visit(i, j, d) } else { Ok(()) },
+            );
+        };
+        let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        l.update(s.x, &self.cell, self.pool.as_deref());
+        l.each_pair(|i, j, d| if near(&d) { visit(i, j, d) } else { Ok(()) })
+    }
+
+    /// Every pair a traversal visits (all pairs, or a cell list rebuilt now), each result
+    /// checked finite as it comes.
+    fn traversed(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<f64, Singularity> {
+        let mut energy = Sum::default();
+        traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
+            if overflowed(&d) {
+                return Err(Singularity { term: self.name, bodies: vec![i, j], what: FAR });
+            }
+            let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
+            for p in &self.rows {
+                let (a, e) = T::eval(p, d, mq, colour).and_then(|r| r.finite(true)).map_err(|what| Singularity {
+                    term: self.name,
+                    bodies: vec![i, j],
+                    what,
+                })?;
+                // applied so that the two are exactly opposite
+                for c in 0..3 {
+                    f[i][c] += a[c];
+                    f[j][c] -= a[c];
+                }
+                energy.add(e);
+            }
+            Ok(())
+        })?;
+        Ok(energy.value())
+    }
+}
+
+/// [mᵢ, mⱼ, qᵢ, qⱼ] if the term reads them, else zeros (and no loads).
+#[inline(always)]
+fn bodies<T: Paired>(s: &Frame, i: usize, j: usize) -> [f64; 4] {
+    if T::BODIES {
+        [s.m[i], s.m[j], s.q[i], s.q[j]]
+    } else {
+        [0.0; 4]
+    }
+}
+
+/// cᵢ·cⱼ if the term reads it, else zero.
+#[inline(always)]
+fn colour<T: Paired>(s: &Frame, i: usize, j: usize) -> f64 {
+    if T::COLOUR {
+        s.c[i][0] * s.c[j][0] + s.c[i][1] * s.c[j][1]
+    } else {
+        0.0
+    }
+}
+
+impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+        stride_alone(self, stride, parts)
+    }
+    /// Through a Verlet list, the energy only if asked (it is a fifth of a pair's arithmetic).
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
+        let Some(list) = &self.list else { return self.traversed(s, f) };
+        let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        l.update(s.x, &self.cell, self.pool.as_deref());
+        let energy = self.through_list(&l, s, f, energy)?;
+        if energy.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
+            return Ok(energy);
+        }
+        // Rare: find the pair that overflowed, by the checked traversal.
+        let mut scratch = vec![[0.0; 3]; f.len()];
+        self.traversed(s, &mut scratch)?;
+        Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW })
+    }
+    fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>> {
+        if let Some(list) = &self.list {
+            let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            l.update(s.x, &self.cell, self.pool.as_deref());
+            return Some(self.listed_virial(&l, s));
+        }
+        let mut w = Sum::default();
+        let visited =
+            self.within_reach(s, |i, j, d| {
+                for p in &self.rows {
+                    let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
+                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
+                    w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+                }
+                Ok(())
+            });
+        Some(visited.map(|_| w.value()))
+    }
+    fn velocity_dependent(&self) -> bool {
+        false
+    }
+    fn plan(&self) -> String {
+        let reach = self.reach.map_or("infinite reach".to_string(), |r| format!("reach {r}"));
+        match &self.list {
+            None if self.reach.is_none() => format!("every pair each step ({reach})"),
+            None => format!("every pair, through a cell list rebuilt each step when there are at least 64 bodies ({reach}; no Verlet list: too few bodies, or a box shorter than twice reach + skin)"),
+            Some(l) => {
+                let l = l.lock().unwrap_or_else(|p| p.into_inner());
+                let threads = self.pool.as_ref().map_or(1, |p| p.current_num_threads());
+                format!(
+                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} on {threads} thread(s)",
+                    l.skin,
+                    l.builds,
+                    l.count(),
+                    l.clusters(),
+                    if l.bodies.len() >= SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
+                )
+            }
+        }
+    }
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        let each = self.derivatives((&[], false, false));
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            for (k, pd) in each.iter().enumerate() {
+                let f = pd.tangent(self.jet(k, &d, pd.reach2), s, dir, i, j, d);
+                for c in 0..3 {
+                    df[i][c] += f[c];
+                    df[j][c] -= f[c];
+                }
+            }
+            Ok(())
+        })
+    }
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let each = self.derivatives_for(wanted);
+        if let Some(list) = self.list.as_ref().filter(|_| self.jets_everywhere(&each)) {
+            let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            l.update(s.x, &self.cell, self.pool.as_deref());
+            self.listed_pullback(&l, g, &each, out);
+            return Ok(());
+        }
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            for (k, pd) in each.iter().enumerate() {
+                pd.pullback(self.jet(k, &d, pd.reach2), s, g, i, j, d, out);
+            }
+            Ok(())
+        })
+    }
+    fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        let each = self.derivatives_for(wanted);
+        self.within_reach(s, |i, j, d| {
+            if d == [0.0; 3] {
+                return Err(coincident(self.name, i, j));
+            }
+            each.iter().for_each(|pd| pd.potential_pullback(s, i, j, d, out));
+            Ok(())
+        })
+    }
+    fn save(&self) -> Option<super::Kept> {
+        let l = self.list.as_ref()?;
+        Some(Box::new(l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone()))
+    }
+    fn restore(&self, kept: &super::Kept) {
+        if let (Some(l), Some(saved)) = (&self.list, kept.downcast_ref::<Neighbours>()) {
+            *l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = saved.clone();
+        }
+    }
+    fn builds(&self) -> u64 {
+        self.list.as_ref().map_or(0, |l| l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).builds)
+    }
+}
