@@ -2,17 +2,15 @@
 //! state, generic over [`Real`]: energy, dissipated power, linear and angular momentum.
 
 use crate::broad_phase::{Foreseen, Near, Neighbourhood};
-use crate::enclosure::Enclosure;
-use crate::exact_sum::ExactSum;
 use crate::model::{Cell, Images, Model, Snapshot, TermInstance};
-use crate::mpfi::Mpfi;
-use crate::outward::lanes::{Lanes, WIDTH};
-use crate::outward::Outward;
 use crate::real::{cross3, dot3, norm2, sub3, Real, Vec3};
-use crate::terms::{Kind, Shape, Site};
-use rug::float::Round;
+use crate::terms::{Shape, Site};
 use std::borrow::Cow;
 use std::sync::Arc;
+
+mod pair_sums;
+
+pub use pair_sums::{asked_reach, foresee, pair_reaches, PairSum};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
@@ -141,36 +139,6 @@ impl<R: PairSum> Lifted<R> {
         acc
     }
 
-    /// `pairs` for `sum`, in the double loop's order: those of the first `CHUNK` bodies added to
-    /// the running sum, those of each later `CHUNK` bodies summed alone (`chunk(n, zero,
-    /// pairs)`) and then added, so that the chunks can be listed and summed on `threads` threads
-    /// and the bits do not depend on how many.
-    fn in_chunks<'s, T: Clone + Send + Sync + 's>(
-        &'s self,
-        (zero, add): (T, impl Fn(T, T) -> T + 's),
-        chunk: impl Fn(usize, T, &[Near]) -> T + Sync + 's,
-    ) -> impl Fn(usize, T, &Neighbourhood) -> T + 's {
-        move |n, acc, near| {
-            let bodies = self.x.len();
-            let sums = in_order(bodies.div_ceil(CHUNK), self.threads, |k| {
-                let start = if k == 0 { acc.clone() } else { zero.clone() };
-                chunk(n, start, &near.of(k * CHUNK..((k + 1) * CHUNK).min(bodies)))
-            });
-            sums.into_iter().reduce(&add).unwrap_or(acc)
-        }
-    }
-
-    /// A chunk of pairs for `in_chunks`: `term` at each pair in turn, added to the running sum.
-    fn one_by_one<'s, T: 's>(
-        &'s self,
-        term: &'s (impl Fn(usize, &[&Site<R>]) -> Option<T> + Sync),
-        add: impl Fn(T, T) -> T + Sync + 's,
-    ) -> impl Fn(usize, T, &[Near]) -> T + Sync + 's {
-        move |n, acc, pairs| {
-            pairs.iter().map(|p| self.sites_of(p)).filter_map(|(a, b)| term(n, &[a, &b])).fold(acc, &add)
-        }
-    }
-
     /// ½ Σ m |v|², and each rigid body's ½ Σ π_k² / I_k.
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
@@ -282,113 +250,6 @@ impl<R: Real> Spin<R> {
                 / n2.clone()
         })
     }
-}
-
-/// How a pair term's potentials at all its pairs are added up: one pair after another in the
-/// double loop's order, or, for `Outward`, four pairs at a time in `Lanes` (each pair gets the
-/// same bits as alone) and added exactly in any order (`ExactSum`).
-pub trait PairSum: Real + Send + Sync {
-    /// `acc` + the potential of instance `n` (of `kind`) at each pair `near` holds.
-    fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
-        let p = &l.params[n];
-        let chunk = |_, acc, pairs: &[Near]| {
-            pairs.iter().map(|q| l.sites_of(q)).fold(acc, |acc, (a, b)| acc + kind.potential(p, &[a, &b]))
-        };
-        l.in_chunks((l.zero.clone(), Self::add), chunk)(n, acc, near)
-    }
-}
-
-impl PairSum for f64 {}
-#[cfg(test)]
-impl PairSum for rug::Float {}
-impl PairSum for Mpfi {}
-
-impl PairSum for Outward {
-    /// Σ lo and Σ hi over the pairs, each exact (`ExactSum`) and rounded once outward: they
-    /// bound the exact sum of the pairs' exact potentials, and their bits do not depend on the
-    /// order the pairs come in, so the broad phase lists them in whatever order is fastest
-    /// (`each_unordered`) and in parts on `threads` threads.
-    fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
-        let wide: Vec<Lanes> = l.params[n].iter().map(|c| Lanes::of([*c; WIDTH])).collect();
-        let parts = near.parts();
-        let pieces = (4 * l.threads).min(parts.max(1));
-        let sums = in_order(pieces, l.threads, |k| {
-            let (mut lo, mut hi, reads) = (ExactSum::default(), ExactSum::default(), kind.reads());
-            let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
-            near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
-                for group in pairs.chunks(WIDTH) {
-                    for (lane, q) in group.iter().enumerate() {
-                        let (a, b) = (&l.sites[q.i], &l.sites[q.j]);
-                        sites[0].put(lane, &a.x, a, reads);
-                        sites[1].put(lane, &l.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
-                    }
-                    // the lanes of a short last group keep the sites of the group before (or
-                    // NaN), and are dropped
-                    for e in &kind.potential(&wide, &[&sites[0], &sites[1]]).lanes()[..group.len()] {
-                        let (a, b) = e.bounds();
-                        lo.add(a);
-                        hi.add(b);
-                    }
-                }
-            });
-            (lo, hi)
-        });
-        let (lo, hi) = sums.into_iter().fold((ExactSum::default(), ExactSum::default()), |(mut lo, mut hi), (a, b)| {
-            lo.merge(&a);
-            hi.merge(&b);
-            (lo, hi)
-        });
-        acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
-    }
-}
-
-/// The reach a pair term's broad phase is asked for: the term's, with a relative margin of
-/// 1e-6 on top (`None`: unbounded).
-pub fn asked_reach(t: &TermInstance) -> Option<f64> {
-    t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6))
-}
-
-/// The distinct reaches the model's pair terms ask their broad phase for (`asked_reach`; a pair
-/// term without one is summed over every pair and needs no list).
-pub fn pair_reaches(model: &Model) -> Vec<f64> {
-    let mut reaches: Vec<f64> = vec![];
-    for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
-        if let Some(r) = asked_reach(t).filter(|r| !reaches.contains(r)) {
-            reaches.push(r);
-        }
-    }
-    reaches
-}
-
-/// The pair lists the pair terms with a reach will want a few steps after state `s`
-/// (`Foreseen`): one per reach, none where a grid would not be used.
-pub fn foresee(model: &Model, s: &Snapshot) -> Vec<Foreseen> {
-    pair_reaches(model).into_iter().filter_map(|r| Foreseen::new(s.x, &model.cell, r)).collect()
-}
-
-/// Bodies whose pairs are summed alone before their sum joins the total (see `Lifted::sum`).
-const CHUNK: usize = 128;
-
-/// `f(k)` for k in 0..n, in order of k, computed on up to `threads` threads (thread w takes
-/// k ≡ w mod threads).
-pub(crate) fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let threads = threads.clamp(1, n.max(1));
-    if threads == 1 {
-        return (0..n).map(f).collect();
-    }
-    let mut out: Vec<Option<T>> = (0..n).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let f = &f;
-        let workers: Vec<_> = (0..threads)
-            .map(|w| scope.spawn(move || (w..n).step_by(threads).map(|k| (k, f(k))).collect::<Vec<_>>()))
-            .collect();
-        for w in workers {
-            for (k, t) in w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)) {
-                out[k] = Some(t);
-            }
-        }
-    });
-    out.into_iter().map(|t| t.expect("every k was computed")).collect()
 }
 
 #[cfg(test)]
@@ -510,105 +371,6 @@ mod tests {
             let (lo, hi) = iv.energy(&m).bounds();
             prop_assert!(hi - lo <= 1e-12 * scale, "width {:e} at scale {scale:e}", hi - lo);
         }
-    }
-
-    proptest! {
-        /// `in_order` gives f(0), …, f(n − 1) in order, whatever the thread count.
-        #[test]
-        fn in_order_is_the_sequential_map(n in 0usize..40, threads in 0usize..6) {
-            prop_assert_eq!(in_order(n, threads, |k| k * k + 1), (0..n).map(|k| k * k + 1).collect::<Vec<_>>());
-        }
-    }
-
-    /// 2,197 LJ atoms in a periodic box: ~50,000 pairs, a dozen chunks.
-    fn liquid() -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None };
-        let model = Model {
-            units: UnitSystem::Reduced,
-            cell: Some(Cell { size: [14.3; 3], periodic: [true; 3] }),
-            bodies: vec![body; 2197],
-            terms: vec![TermInstance { kind: Kind::LennardJonesShifted, sites: vec![], params: vec![1.0, 1.0, 2.5] }],
-            constraints: vec![],
-            thermostat: None,
-            floor: None,
-        };
-        let jitter = |k: usize| ((k * 7919 % 1000) as f64 / 1000.0 - 0.5) * 0.2;
-        let x = (0..2197).map(|k| [k % 13, k / 13 % 13, k / 169].map(|c| c as f64 * 1.1 + jitter(k + c))).collect();
-        let v = (0..2197).map(|k| [jitter(k), jitter(k + 1), jitter(k + 2)]).collect();
-        (model, x, v)
-    }
-
-    /// The chunked pair sum is the same bits on 1, 2 and 3 threads, spans several chunks, and
-    /// encloses the 256-bit MPFR value.
-    #[test]
-    fn pair_sums_are_the_same_bits_on_any_thread_count() {
-        let (m, x, v) = liquid();
-        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
-        let on = |n| Lifted::new(&m, &s, &Outward::NAN).on_threads(n).energy(&m);
-        let one = on(1);
-        assert!(x.len() > 4 * CHUNK, "several chunks");
-        for n in [2, 3] {
-            let bits = |(lo, hi): (f64, f64)| (lo.to_bits(), hi.to_bits());
-            assert_eq!(bits(on(n).bounds()), bits(one.bounds()));
-        }
-        let exact = Lifted::new(&m, &s, &Float::new(256)).on_threads(2).energy(&m);
-        let (lo, hi) = one.bounds();
-        assert!(Float::with_val(256, lo) <= exact && exact <= Float::with_val(256, hi), "{one:?}");
-        assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
-    }
-
-    /// Four pairs at a time (`PairSum` for `Outward`), listed in any order and in parts, give
-    /// the bits of each pair's own enclosure (evaluated alone, in the double loop's order) added
-    /// exactly and rounded once — whatever the number of pairs modulo four, by the grid and by
-    /// the double loop (under 64 bodies) — and never a wider sum than adding them one by one.
-    #[test]
-    fn pairs_in_lanes_add_up_to_the_exact_sum_of_each_alone() {
-        let (all, x, v) = liquid();
-        for n in [2, 5, 63, 64, 97, 500, 2197] {
-            let m = Model { bodies: all.bodies[..n].to_vec(), ..all.clone() };
-            let s = Snapshot { step: 0, t: 0.0, x: &x[..n], v: &v[..n], chain: &[], spin: &[] };
-            let q = Lifted::new(&m, &s, &Outward::NAN);
-            let (t, p) = (&m.terms[0], &q.params[0]);
-            let pairs = crate::broad_phase::within(&x[..n], &m.cell, asked_reach(t));
-            let start = Outward::point(-1.5);
-            let (mut lo, mut hi, mut one_by_one) = (ExactSum::default(), ExactSum::default(), start);
-            for (a, b) in pairs.iter().map(|p| q.sites_of(p)) {
-                let e = t.kind.potential(p, &[a, &b]);
-                (lo.add(e.bounds().0), hi.add(e.bounds().1));
-                one_by_one = one_by_one + e;
-            }
-            let want = start + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up));
-            let near = Neighbourhood::new(&x[..n], &m.cell, asked_reach(t), &[]);
-            for threads in [1, 3] {
-                let on = Lifted::new(&m, &s, &Outward::NAN).on_threads(threads);
-                let got = Outward::add_potentials(&on, start, t.kind, 0, &near);
-                let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
-                assert_eq!(bits(got), bits(want), "{n} bodies, {} pairs, {threads} threads", pairs.len());
-                assert!(got.bounds().0 >= one_by_one.bounds().0 && got.bounds().1 <= one_by_one.bounds().1);
-            }
-        }
-    }
-
-    /// Pair lists made a little earlier (`foresee`) change no bit of the energy, and a state
-    /// that moved too far falls back to the grid, with the same bits too.
-    #[test]
-    fn lists_made_ahead_change_no_bit() {
-        let (m, x, v) = liquid();
-        let earlier: Vec<[f64; 3]> =
-            x.iter().zip(&v).map(|(p, u)| std::array::from_fn(|a| p[a] - 0.5 * u[a])).collect();
-        let ahead: Arc<[Foreseen]> =
-            foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[], spin: &[] }).into();
-        assert_eq!(ahead.len(), 1);
-        let bits = |x: &[[f64; 3]], ahead: Arc<[Foreseen]>| {
-            let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[], spin: &[] }, &Outward::NAN)
-                .foreseeing(ahead)
-                .energy(&m);
-            (e.bounds().0.to_bits(), e.bounds().1.to_bits())
-        };
-        assert_eq!(bits(&x, ahead.clone()), bits(&x, Arc::default()));
-        let mut far = x.clone();
-        far[7][1] += 0.4;
-        assert_eq!(bits(&far, ahead), bits(&far, Arc::default()));
     }
 
     #[test]
