@@ -97,36 +97,36 @@ pub fn free_step(s: &mut Spin, moments: Vector3<f64>, h: f64) {
     *s = [q.w, q.i, q.j, q.k, p[0], p[1], p[2]];
 }
 
-/// The period of the body-frame angular momentum of a torque-free body (Landau and Lifshitz,
-/// Mechanics §37), from its moments (distinct, any order), |L|² and 2T: π returns after
-/// T = 4K(k) √(I₁I₂I₃ / ((I₃ − I₂)(L² − 2E I₁))), k² = (I₂ − I₁)(2E I₃ − L²) / ((I₃ − I₂)(L² − 2E I₁)),
-/// with I₁ < I₂ < I₃ ordered so that L² > 2E I₂ (else I₁ and I₃ swap roles). Near the
-/// intermediate axis this is the time between two of its flips and back.
-pub fn free_period(moments: Vector3<f64>, l2: f64, two_e: f64) -> f64 {
-    let mut i = [moments[0], moments[1], moments[2]];
-    i.sort_by(f64::total_cmp);
-    if l2 < two_e * i[1] {
-        i.swap(0, 2);
-    }
-    let [i1, i2, i3] = i;
-    let k2 = (i2 - i1) * (two_e * i3 - l2) / ((i3 - i2) * (l2 - two_e * i1));
-    4.0 * elliptic_k(k2) * (i1 * i2 * i3 / ((i3 - i2) * (l2 - two_e * i1))).sqrt()
-}
-
-/// The complete elliptic integral of the first kind K(m), m = k² < 1, by the arithmetic-geometric
-/// mean: K = π / (2 AGM(1, √(1 − m))).
-fn elliptic_k(m: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - m).sqrt());
-    while (a - b).abs() > 1e-15 * a {
-        (a, b) = (0.5 * (a + b), (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// The period of the body-frame angular momentum of a torque-free body (Landau and Lifshitz,
+    /// Mechanics §37), from its moments (distinct, any order), |L|² and 2T: π returns after
+    /// T = 4K(k) √(I₁I₂I₃ / ((I₃ − I₂)(L² − 2E I₁))), k² = (I₂ − I₁)(2E I₃ − L²) / ((I₃ − I₂)(L² − 2E I₁)),
+    /// with I₁ < I₂ < I₃ ordered so that L² > 2E I₂ (else I₁ and I₃ swap roles). Near the
+    /// intermediate axis this is the time between two of its flips and back.
+    fn free_period(moments: Vector3<f64>, l2: f64, two_e: f64) -> f64 {
+        let mut i = [moments[0], moments[1], moments[2]];
+        i.sort_by(f64::total_cmp);
+        if l2 < two_e * i[1] {
+            i.swap(0, 2);
+        }
+        let [i1, i2, i3] = i;
+        let k2 = (i2 - i1) * (two_e * i3 - l2) / ((i3 - i2) * (l2 - two_e * i1));
+        4.0 * elliptic_k(k2) * (i1 * i2 * i3 / ((i3 - i2) * (l2 - two_e * i1))).sqrt()
+    }
+
+    /// The complete elliptic integral of the first kind K(m), m = k² < 1, by the arithmetic-geometric
+    /// mean: K = π / (2 AGM(1, √(1 − m))).
+    fn elliptic_k(m: f64) -> f64 {
+        let (mut a, mut b) = (1.0f64, (1.0 - m).sqrt());
+        while (a - b).abs() > 1e-15 * a {
+            (a, b) = (0.5 * (a + b), (a * b).sqrt());
+        }
+        std::f64::consts::PI / (2.0 * a)
+    }
 
     const MOMENTS: [f64; 3] = [1.0, 2.0, 3.0];
 
