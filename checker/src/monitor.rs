@@ -12,6 +12,7 @@ use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
 use crate::outward::Outward;
 use crate::quantities::{foresee, pair_reaches, Lifted};
+use crate::states::State;
 use crate::terms::Kind;
 use std::sync::Arc;
 
@@ -60,11 +61,7 @@ struct Track {
 /// The state at step 0, kept whole so that it can be re-evaluated at any precision, and each
 /// claim's quantity on it in binary64 intervals (in the order of the claims).
 struct Reference {
-    t: f64,
-    x: Vec<[f64; 3]>,
-    v: Vec<[f64; 3]>,
-    chain: Vec<[f64; 2]>,
-    spin: Vec<[f64; 7]>,
+    state: State,
     measures: Vec<Vec<Outward>>,
 }
 
@@ -215,14 +212,7 @@ impl Monitor {
                     Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: Outward::point(0.0) });
             }
             let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model, s)).collect();
-            self.reference = Some(Reference {
-                t: s.t,
-                x: s.x.to_vec(),
-                v: s.v.to_vec(),
-                chain: s.chain.to_vec(),
-                spin: s.spin.to_vec(),
-                measures,
-            });
+            self.reference = Some(Reference { state: State::from(s), measures });
         } else if let Some(l) = &mut self.ledger {
             let power = q.dissipated_power(model);
             l.dissipated =
@@ -287,7 +277,7 @@ impl Monitor {
 /// that decides, or the one at the cap. The dissipated energy, integrated in binary64
 /// intervals, enters as it is.
 fn escalate(model: &Model, r: &Reference, s: &Snapshot, claim: &Claim, threads: usize, q: Outward, tol: f64) -> Mark {
-    let r0 = Snapshot { step: 0, t: r.t, x: &r.x, v: &r.v, chain: &r.chain, spin: &r.spin };
+    let r0 = r.state.snapshot();
     let at = |precision: Precision| {
         let proto = Mpfi::point(precision, 0.0);
         let now = measure(claim, &Lifted::new(model, s, &proto).on_threads(threads), model, s);

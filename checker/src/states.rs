@@ -177,6 +177,12 @@ impl State {
     }
 }
 
+impl From<&Snapshot<'_>> for State {
+    fn from(s: &Snapshot) -> State {
+        State { step: s.step, t: s.t, x: s.x.to_vec(), v: s.v.to_vec(), chain: s.chain.to_vec(), spin: s.spin.to_vec() }
+    }
+}
+
 fn u64_at(b: &[u8], at: usize) -> u64 {
     let mut a = [0u8; 8];
     a.copy_from_slice(&b[at..at + 8]);
