@@ -137,16 +137,19 @@ impl Solver for Impulses {
     fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
         let h = dt / self.substeps as f64;
         let slop = SLOP * self.solids.margin;
-        let poses = self.solids.poses(&s.x, &s.spin);
+        let mut poses = self.solids.poses(&s.x, &s.spin);
         let mut rows: Vec<Row> = self.solids.touching(&poses).into_iter().map(|t| Row::new(t, &poses)).collect();
         // from the highest contact down: a stack's weight reaches the floor within one sweep
         rows.sort_by(|a, b| b.touch.point.y.total_cmp(&a.touch.point.y));
         self.start_warm(&mut rows);
         // the residual: the largest normal speed the last sweep still had to correct
         let mut residual = 0.0f64;
-        for _ in 0..self.substeps {
+        for substep in 0..self.substeps {
             g.kick(&mut s.v, &self.at.f, h);
-            let poses = self.solids.poses(&s.x, &s.spin);
+            // a kick moves no body: the first substep's poses are the step's
+            if substep > 0 {
+                poses = self.solids.poses(&s.x, &s.spin);
+            }
             let mut mobile = mobiles(g, s, &poses);
             for r in rows.iter_mut() {
                 r.prepare(&poses, &mobile, h, slop);
