@@ -153,7 +153,8 @@ impl<'a> Neighbourhood<'a> {
                 members[fill[grid.index(*c)]] = i;
                 fill[grid.index(*c)] += 1;
             }
-            let placed = std::array::from_fn(|a| members.iter().map(|&i| x[i][a]).collect());
+            // a run of padding after the last body, for `test_run`
+            let placed = std::array::from_fn(|a| members.iter().map(|&i| x[i][a]).chain([f64::NAN; RUN]).collect());
             Bins { grid, cells, start, members, placed }
         });
         Neighbourhood { x, images, limit, bins, listed }
@@ -180,12 +181,12 @@ impl<'a> Neighbourhood<'a> {
         for i in bodies {
             js.clear();
             if let Some(l) = self.listed {
-                for run in l.after[l.start[i]..l.start[i + 1]].chunks(32) {
-                    let mut kept = [0u8; 32];
-                    for (k, &j) in kept.iter_mut().zip(run) {
-                        *k = u8::from(self.near(i, &self.x[j as usize]));
+                for run in l.after[l.start[i]..l.start[i + 1]].chunks(RUN) {
+                    let mut placed = [[f64::NAN; RUN]; 3];
+                    for (k, &j) in run.iter().enumerate() {
+                        (0..3).for_each(|a| placed[a][k] = self.x[j as usize][a]);
                     }
-                    each_kept(&kept, |k| js.push(run[k] as usize));
+                    each_kept(self.passed(i, placed.each_ref()), |k| js.push(run[k] as usize));
                 }
             } else if let Some(b) = &self.bins {
                 b.grid.around(b.cells[i], |m| {
@@ -197,7 +198,7 @@ impl<'a> Neighbourhood<'a> {
                         (_, Some(&last)) if last > i => lo + cell.partition_point(|&j| j <= i),
                         _ => return,
                     };
-                    self.test_run(i, &b.members[from..hi], b.placed.each_ref().map(|p| &p[from..hi]), |j| js.push(j));
+                    self.test_run(i, &b.members[from..hi], b.placed.each_ref().map(|p| &p[from..]), |j| js.push(j));
                 });
                 js.sort_unstable();
             } else {
@@ -207,19 +208,24 @@ impl<'a> Neighbourhood<'a> {
         }
     }
 
-    /// `keep(j)` for each body j of `bodies` (placed at `xs`, `ys`, `zs`), in their order,
-    /// whose nearest image is within reach of body i: a run's tests first (they vectorise),
-    /// then the passes.
+    /// `keep(j)` for each body j of `bodies` in their order (placed at `placed`, whose
+    /// coordinates run on for `RUN` more values, the padding after the last body) whose nearest
+    /// image is within reach of body i: a run's tests first, then the passes.
     #[inline(always)]
-    fn test_run(&self, i: usize, bodies: &[usize], [xs, ys, zs]: [&[f64]; 3], mut keep: impl FnMut(usize)) {
-        let chunks = bodies.chunks(32).zip(xs.chunks(32)).zip(ys.chunks(32)).zip(zs.chunks(32));
-        for (((bodies, xs), ys), zs) in chunks {
-            let mut kept = [0u8; 32];
-            for (((k, x), y), z) in kept.iter_mut().zip(xs).zip(ys).zip(zs) {
-                *k = u8::from(self.near(i, &[*x, *y, *z]));
-            }
-            each_kept(&kept, |k| keep(bodies[k]));
+    fn test_run(&self, i: usize, bodies: &[usize], placed: [&[f64]; 3], mut keep: impl FnMut(usize)) {
+        for (at, bodies) in (0..).step_by(RUN).zip(bodies.chunks(RUN)) {
+            let run = placed.map(|p| p[at..at + RUN].try_into().expect("placed coordinates are padded by a run"));
+            // the bits past the last body are the padding's (or the next cell's) and are dropped
+            each_kept(self.passed(i, run) & u32::MAX >> (RUN - bodies.len()), |k| keep(bodies[k]));
         }
+    }
+
+    /// Bit k set where the body placed at (xs[k], ys[k], zs[k]) is within reach of body i. A
+    /// whole run at a time, into a register: the tests vectorise into compares and masks (one
+    /// byte stored per test and read back eight at a time stalled on store forwarding).
+    #[inline(always)]
+    fn passed(&self, i: usize, [xs, ys, zs]: [&[f64; RUN]; 3]) -> u32 {
+        (0..RUN).fold(0, |bits, k| bits | u32::from(self.near(i, &[xs[k], ys[k], zs[k]])) << k)
     }
 
     /// The bins, unless a list made ahead is used instead.
@@ -264,6 +270,7 @@ impl<'a> Neighbourhood<'a> {
                     placed.iter_mut().for_each(Vec::clear);
                     b.copy_cell(m, &mut near, &mut placed);
                     b.grid.half_shell(m, |n| b.copy_cell(n, &mut near, &mut placed));
+                    placed.iter_mut().for_each(|p| p.extend([f64::NAN; RUN]));
                     pairs.clear();
                     for (q, &i) in b.members[b.start[m]..b.start[m + 1]].iter().enumerate() {
                         let after = placed.each_ref().map(|p| &p[q + 1..]);
@@ -276,20 +283,16 @@ impl<'a> Neighbourhood<'a> {
     }
 }
 
-/// `f(k)` for each k, in increasing order, whose test passed (`kept[k]` 1, else 0) in a run of
-/// up to 32 candidates. The tests are run first, a run at a time (they vectorise), and the kept
-/// candidates read off their bits: no branch on a test's outcome to mispredict.
+/// Candidates tested at a time (`Neighbourhood::passed`): one bit each in a `u32`.
+const RUN: usize = 32;
+
+/// `f(k)` for each k, in increasing order, whose test passed (bit k of `kept` set): the kept
+/// candidates read off the bits, with no branch on a test's outcome to mispredict.
 #[inline]
-fn each_kept(kept: &[u8; 32], mut f: impl FnMut(usize)) {
-    // eight 0/1 bytes to eight bits in one multiplication: byte k's bit lands on bit 56 + k,
-    // and no two other products share a bit below it (so nothing carries into it)
-    let eight = |w: &[u8]| {
-        (u64::from_le_bytes(w.try_into().expect("runs of 8")).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
-    };
-    let mut bits = kept.chunks_exact(8).rev().fold(0u32, |m, w| m << 8 | eight(w));
-    while bits != 0 {
-        f(bits.trailing_zeros() as usize);
-        bits &= bits - 1;
+fn each_kept(mut kept: u32, mut f: impl FnMut(usize)) {
+    while kept != 0 {
+        f(kept.trailing_zeros() as usize);
+        kept &= kept - 1;
     }
 }
 
@@ -523,10 +526,9 @@ mod tests {
         #[test]
         fn kept_candidates_are_read_off_their_bits(passed in prop::collection::vec(any::<bool>(), 0..=32)) {
             let run: Vec<usize> = (0..passed.len()).map(|k| 1000 + 7 * k).collect();
-            let mut kept = [0u8; 32];
-            kept.iter_mut().zip(&passed).for_each(|(k, &p)| *k = u8::from(p));
+            let kept = passed.iter().enumerate().fold(0, |bits, (k, &p)| bits | u32::from(p) << k);
             let mut js = vec![5];
-            each_kept(&kept, |k| js.push(run[k]));
+            each_kept(kept, |k| js.push(run[k]));
             let want: Vec<usize> = std::iter::once(5).chain(run.iter().zip(&passed).filter(|(_, &p)| p).map(|(&j, _)| j)).collect();
             prop_assert_eq!(js, want);
         }

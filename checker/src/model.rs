@@ -115,8 +115,10 @@ pub struct Cell {
 
 impl Cell {
     /// How many box lengths to take off a displacement `d` along each axis to reach its nearest
-    /// image: round(d·(1/L)) on periodic axes, 0 elsewhere. Kernel and checker both choose
-    /// images with this one rule (`Images`).
+    /// image: d·(1/L) rounded to the nearest integer, ties to even (one instruction, where ties
+    /// away from zero take four, in every distance test of the broad phase; at a tie either
+    /// image is as near), on periodic axes, 0 elsewhere. Kernel and checker both choose images
+    /// with this one rule (`Images`).
     pub fn shift(cell: &Option<Cell>, d: [f64; 3]) -> [f64; 3] {
         Images::of(cell).shift(d)
     }
@@ -149,7 +151,7 @@ impl Images {
     /// `Cell::shift` (±0 on open axes).
     #[inline]
     pub fn shift(&self, d: [f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|a| (d[a] * self.inverse[a]).round())
+        std::array::from_fn(|a| (d[a] * self.inverse[a]).round_ties_even())
     }
 
     /// `Cell::image`: d − k·L (d itself on open axes, but for the sign of a zero).
