@@ -58,8 +58,10 @@ struct Track {
     stopped: Option<Verdict>,
 }
 
-/// The state at step 0, kept whole so that it can be re-evaluated at any precision, and each
-/// claim's quantity on it in binary64 intervals (in the order of the claims).
+/// The first state handed in (a run's step 0), kept whole so that
+/// it can be re-evaluated at any precision, and each claim's quantity on it in binary64
+/// intervals (in the order of the claims). Re-evaluated, it keeps its own step number, which no
+/// quantity reads.
 struct Reference {
     state: State,
     measures: Vec<Vec<Outward>>,
