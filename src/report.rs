@@ -41,6 +41,11 @@ pub struct Summary {
     time_unit: &'static str,
     pub steps: u64,
     pub wall_s: f64,
+    /// The checker's time judging the states, on whichever thread (on one CPU, its cost).
+    pub checker_s: f64,
+    /// Of `wall_s`, the kernel's thread's time on the checker: judging inline, or waiting for a
+    /// verdict from the second thread (on two CPUs, its cost).
+    pub checker_wait_s: f64,
     /// None for a run that took no step (no rate to give).
     pub steps_per_s: Option<f64>,
     pub ns_per_atom_step: Option<f64>,
@@ -105,6 +110,8 @@ impl Summary {
             time_unit: if scene.model.units == UnitSystem::Si { " s" } else { "" },
             steps: r.steps,
             wall_s: r.wall_s,
+            checker_s: r.checker_s,
+            checker_wait_s: r.checker_wait_s,
             steps_per_s: (r.steps > 0).then(|| r.steps as f64 / r.wall_s),
             ns_per_atom_step: (r.steps > 0).then(|| r.wall_s * 1e9 / atom_steps),
             iterations: r.iterations.clone(),
@@ -144,6 +151,13 @@ impl Summary {
         };
         let threads = format!("{} thread{}", self.threads, if self.threads == 1 { "" } else { "s" });
         let _ = writeln!(s, "wall        {:.3} s ({rate}{threads})", self.wall_s);
+        if !self.claims.is_empty() {
+            let _ = writeln!(
+                s,
+                "checker     {:.3} s judging, the kernel {:.3} s waiting for it",
+                self.checker_s, self.checker_wait_s
+            );
+        }
         if let Some(it) = &self.iterations.as_ref().filter(|it| it.solves > 0) {
             let _ = writeln!(
                 s,

@@ -232,8 +232,25 @@ fn json_report_has_the_timing_fields() {
     for k in ["wall_s", "steps_per_s", "ns_per_atom_step"] {
         assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
     }
+    // inline (two bodies), the checker's time judging is the kernel's time waiting for it
+    let (judging, waiting) = (v["checker_s"].as_f64().unwrap(), v["checker_wait_s"].as_f64().unwrap());
+    assert!(judging > 0.0 && judging == waiting && waiting < v["wall_s"].as_f64().unwrap());
     // one "claim" key per verdict: a flattened field must not repeat a key
     assert_eq!(stdout(&o).matches("\"claim\"").count(), v["claims"].as_array().unwrap().len());
+}
+
+/// Overlapped (32,000 atoms), the checker's CPU time and the kernel's wait are each its own,
+/// the wait within the run; the text report gives both, and a scene without claims neither.
+#[test]
+fn the_checkers_time_is_reported_overlapped() {
+    let (o, v) = json(&["scenes/bench/lj_32k_checked.lagra", "--steps", "2"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(v["checker"].as_str().unwrap().starts_with("on a second thread"));
+    let (judging, waiting) = (v["checker_s"].as_f64().unwrap(), v["checker_wait_s"].as_f64().unwrap());
+    assert!(judging > 0.0 && (0.0..v["wall_s"].as_f64().unwrap()).contains(&waiting), "{judging} {waiting}");
+    let text = |scene: &str| stdout(&lagra(&["run", scene, "--steps", "1"]));
+    assert!(text("scenes/bench/lj_32k_checked.lagra").contains("\nchecker     "));
+    assert!(!text("scenes/bench/lj_32k_shifted.lagra").contains("\nchecker     "));
 }
 
 /// `--progress always` reports the steps on stderr and changes nothing in the report;

@@ -50,7 +50,8 @@ pub struct Overlap<'s> {
     last: u64,
     /// The step of the state handed ahead of the last checkpoint, if any.
     ahead: Option<u64>,
-    thread: ScopedJoinHandle<'s, Monitor>,
+    /// The monitor, and the CPU seconds the thread spent judging and listing ahead.
+    thread: ScopedJoinHandle<'s, (Monitor, f64)>,
 }
 
 impl<'s> Checking<'s> {
@@ -64,10 +65,14 @@ impl<'s> Checking<'s> {
         let (states, inbox) = sync_channel::<Handed>(1);
         let (outbox, verdicts) = sync_channel(1);
         let thread = scope.spawn(move || {
+            // CPU time, not wall: on one CPU the thread shares it with the kernel's
+            let mut busy = 0.0;
             for handed in inbox {
+                let started = cpu_time::ThreadTime::now();
                 let s = match handed {
                     Handed::Ahead(s) => {
                         monitor.foresee(&s.snapshot());
+                        busy += started.elapsed().as_secs_f64();
                         continue;
                     }
                     Handed::Checkpoint(s) => s,
@@ -76,11 +81,12 @@ impl<'s> Checking<'s> {
                 // nothing else overlaps
                 monitor.set_threads(if s.step == last { cpus } else { 1 });
                 let verdict = monitor.observe(&s.snapshot()).map_err(|h| (h, s));
+                busy += started.elapsed().as_secs_f64();
                 if outbox.send(verdict).is_err() {
                     break;
                 }
             }
-            monitor
+            (monitor, busy)
         });
         Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, ahead, thread })
     }
@@ -127,14 +133,16 @@ impl<'s> Checking<'s> {
         }
     }
 
-    /// The monitor, every verdict read.
-    pub fn into_monitor(self) -> Monitor {
+    /// The monitor, every verdict read, and overlapped, the CPU seconds the second thread spent
+    /// judging (inline, that is the time `show` took).
+    pub fn into_monitor(self) -> (Monitor, Option<f64>) {
         match self {
-            Checking::Inline(m) => m,
+            Checking::Inline(m) => (m, None),
             Checking::Overlapped(o) => {
                 drop(o.states);
                 drop(o.verdicts);
-                o.thread.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                let (m, busy) = o.thread.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+                (m, Some(busy))
             }
         }
     }
@@ -242,7 +250,7 @@ mod tests {
                 let due: Vec<u64> =
                     std::iter::successors(Some(0), |&s| Some(c.next_due(s)).filter(|_| s < 60)).collect();
                 assert_eq!(due[1..], stops, "{cpus} CPUs");
-                c.into_monitor();
+                c.into_monitor().0;
             });
         }
         let (a, b) = both(&scene);

@@ -46,6 +46,13 @@ pub struct Report {
     pub planned_steps: u64,
     pub steps: u64,
     pub wall_s: f64,
+    /// The time the checker spent judging the states (and listing pairs ahead), on the kernel's
+    /// thread (inline) or on its own: on one CPU, what it adds to the run.
+    pub checker_s: f64,
+    /// Of `wall_s`, the time the kernel's thread spent on the checker: judging inline, or waiting
+    /// for a verdict the second thread had not reached: on two CPUs, what it adds to the run
+    /// (with what sharing the machine's caches costs the kernel's steps).
+    pub checker_wait_s: f64,
     pub stop: Option<Stop>,
     pub outcome: Outcome,
     pub predictions: Vec<Measured>,
@@ -130,11 +137,17 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let cancel = opts.stop;
     let watched_often = progress.is_some() || cancel.is_some();
     let stride = if watched_often { ((1u64 << 20) / scene.x0.len().max(1) as u64).max(1) } else { u64::MAX };
+    // the kernel's thread's time on the checker, added up by `check` and the last settle
+    let waited = std::cell::Cell::new(0.0);
+    let judged = |since: Instant| waited.set(waited.get() + since.elapsed().as_secs_f64());
     let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
         }
-        Ok(checking.show(s).err().map(|(halt, at)| {
+        let judging = Instant::now();
+        let shown = checking.show(s);
+        judged(judging);
+        Ok(shown.err().map(|(halt, at)| {
             *s = at;
             Stop::Checker(halt)
         }))
@@ -143,7 +156,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
     let mut iterations = None;
-    let monitor = std::thread::scope(|scope| -> Result<Monitor, String> {
+    let (monitor, busy) = std::thread::scope(|scope| -> Result<(Monitor, Option<f64>), String> {
         let mut checking = if overlap {
             Checking::overlapped(scope, monitor, &scene.claims, steps)
         } else {
@@ -205,7 +218,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             }
         }
         // a breach at the checkpoint still being judged came first
-        if let Err((halt, at)) = checking.settle() {
+        let judging = Instant::now();
+        let settled = checking.settle();
+        judged(judging);
+        if let Err((halt, at)) = settled {
             (stop, state) = (Some(Stop::Checker(halt)), at);
         }
         Ok(checking.into_monitor())
@@ -233,6 +249,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         planned_steps: steps,
         steps: state.step,
         wall_s,
+        checker_s: busy.unwrap_or(waited.get()),
+        checker_wait_s: waited.get(),
         stop,
         outcome: monitor.finish(),
         predictions,
