@@ -47,7 +47,8 @@ pub struct Report {
     pub steps: u64,
     pub wall_s: f64,
     /// The time the checker spent judging the states (and listing pairs ahead), on the kernel's
-    /// thread (inline) or on its own: on one CPU, what it adds to the run.
+    /// thread (inline) or on its own (its CPU time there, but the wall time of a checkpoint
+    /// spread over every CPU): on one CPU, what it adds to the run.
     pub checker_s: f64,
     /// Of `wall_s`, the time the kernel's thread spent on the checker: judging inline, or waiting
     /// for a verdict the second thread had not reached: on two CPUs, what it adds to the run
