@@ -32,10 +32,11 @@ pub struct Near {
 const SKIN: f64 = 0.3;
 
 /// How many steps before a checkpoint its pairs are worth listing ahead: long enough for the
-/// list to be built while the kernel steps on (~50 ms for 32,000 LJ atoms, against ~100 ms for
-/// 12 of the kernel's steps), short enough that bodies stay within the skin (in the LJ
-/// benchmark, T = 1.44 and dt = 0.005, the fastest atom moves 0.10σ in 5 steps and 0.20σ in 10,
-/// against the 0.37σ the skin of a 2.5σ cutoff allows). Farther, the grid is built instead.
+/// list to be built while the kernel steps on (~20 ms for 32,000 LJ atoms, ~30 ms beside the
+/// kernel, against ~60 ms for 12 of the kernel's steps), short enough that bodies stay within
+/// the skin (in the LJ benchmark, T = 1.44 and dt = 0.005, the fastest atom moves 0.10σ in 5
+/// steps and 0.20σ in 10, against the 0.37σ the skin of a 2.5σ cutoff allows). Farther, the
+/// grid is built instead.
 pub const FORESIGHT: u64 = 12;
 
 /// The pairs, sorted, whose nearest images are within `reach` (`None`: unbounded, every pair).
@@ -47,6 +48,9 @@ pub fn within(x: &[[f64; 3]], cell: &Option<Cell>, reach: Option<f64>) -> Vec<Ne
 /// any run of bodies.
 pub struct Neighbourhood<'a> {
     x: &'a [[f64; 3]],
+    cell: &'a Option<Cell>,
+    /// The reach asked for (`None`: unbounded).
+    reach: Option<f64>,
     images: Images,
     /// The reach squared (∞: unbounded).
     limit: f64,
@@ -60,12 +64,14 @@ pub struct Neighbourhood<'a> {
 /// image (the triangle inequality: whichever images the bodies are seen through, their
 /// displacements shift the pair's image by whole boxes). So while no body has moved more than
 /// half the skin the list holds every pair within reach, and the distance test keeps exactly
-/// the pairs the grid would give, in the same order.
+/// the pairs the grid would give.
 pub struct Foreseen {
     x: Vec<[f64; 3]>,
     reach: f64,
-    /// Body i's partners j > i, increasing: `after[start[i]..start[i + 1]]` (32 bits each: this
-    /// list is built beside the kernel's own, and half the size is half the memory traffic).
+    /// List p, of body `bodies[p]`: `after[start[p]..start[p + 1]]`, each pair once, under either
+    /// of its bodies (in the grid's order, `Neighbourhood::half_shells`: no sort; 32 bits each:
+    /// this list is built beside the kernel's own, and half the size is half the memory traffic).
+    bodies: Vec<u32>,
     start: Vec<usize>,
     after: Vec<u32>,
 }
@@ -75,13 +81,18 @@ impl Foreseen {
     /// bodies, or coordinates too large for its rounding argument) or for 2³² bodies or more.
     pub fn new(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64) -> Option<Foreseen> {
         let wide = Neighbourhood::new(x, cell, Some(reach * (1.0 + SKIN)), &[]);
-        wide.bins.as_ref().filter(|_| u32::try_from(x.len()).is_ok())?;
-        let (mut start, mut after) = (vec![0], vec![]);
-        wide.each(0..x.len(), |_, js| {
-            after.extend(js.iter().map(|&j| j as u32));
-            start.push(after.len());
+        let b = wide.bins.as_ref().filter(|_| u32::try_from(x.len()).is_ok())?;
+        // a list for each body with partners (a body's partners come one after another)
+        let (mut bodies, mut start, mut after) = (vec![], vec![], vec![]);
+        wide.half_shells(b, 0..b.start.len() - 1, |i, j| {
+            if bodies.last() != Some(&(i as u32)) {
+                bodies.push(i as u32);
+                start.push(after.len());
+            }
+            after.push(j as u32);
         });
-        Some(Foreseen { x: x.to_vec(), reach, start, after })
+        start.push(after.len());
+        Some(Foreseen { x: x.to_vec(), reach, bodies, start, after })
     }
 
     pub fn reach(&self) -> f64 {
@@ -133,10 +144,10 @@ impl<'a> Neighbourhood<'a> {
         let limit =
             reach.map_or(f64::INFINITY, |r| ((r + (size + r) * 2f64.powi(-49)) * (1.0 + 2f64.powi(-48))).powi(2));
         let images = Images::of(cell);
-        let reach =
+        let gridded =
             reach.filter(|r| *r > 0.0 && r.is_finite() && x.len() >= GRID_FROM && size * 2f64.powi(-40) < 1e-3 * r);
-        let listed = reach.and_then(|r| ahead.iter().find(|f| f.holds(x, &images, r)));
-        let grid = reach.filter(|_| listed.is_none()).and_then(|r| Grid::new(x, cell, r * 1.01));
+        let listed = gridded.and_then(|r| ahead.iter().find(|f| f.holds(x, &images, r)));
+        let grid = gridded.filter(|_| listed.is_none()).and_then(|r| Grid::new(x, cell, r * 1.01));
         let bins = grid.map(|grid| {
             let cells: Vec<[usize; 3]> = x.iter().map(|p| grid.cell_of(p)).collect();
             // a counting sort by cell
@@ -157,7 +168,7 @@ impl<'a> Neighbourhood<'a> {
             let placed = std::array::from_fn(|a| members.iter().map(|&i| x[i][a]).chain([f64::NAN; RUN]).collect());
             Bins { grid, cells, start, members, placed }
         });
-        Neighbourhood { x, images, limit, bins, listed }
+        Neighbourhood { x, cell, reach, images, limit, bins, listed }
     }
 
     /// Whether `xj`, body j's position, has its nearest image within reach of body i.
@@ -175,20 +186,16 @@ impl<'a> Neighbourhood<'a> {
     }
 
     /// `f(i, js)` for each i in `bodies` in turn, js being the bodies j > i within reach of i,
-    /// increasing.
+    /// increasing. A list made ahead holds a pair under either body, so the grid is built here
+    /// instead (the checker's own sums, which use the list, take their pairs in no order).
     fn each(&self, bodies: Range<usize>, mut f: impl FnMut(usize, &[usize])) {
+        if self.listed.is_some() {
+            return Neighbourhood::new(self.x, self.cell, self.reach, &[]).each(bodies, f);
+        }
         let mut js = vec![];
         for i in bodies {
             js.clear();
-            if let Some(l) = self.listed {
-                for run in l.after[l.start[i]..l.start[i + 1]].chunks(RUN) {
-                    let mut placed = [[f64::NAN; RUN]; 3];
-                    for (k, &j) in run.iter().enumerate() {
-                        (0..3).for_each(|a| placed[a][k] = self.x[j as usize][a]);
-                    }
-                    each_kept(self.passed(i, placed.each_ref()), |k| js.push(run[k] as usize));
-                }
-            } else if let Some(b) = &self.bins {
+            if let Some(b) = &self.bins {
                 b.grid.around(b.cells[i], |m| {
                     let (lo, hi) = (b.start[m], b.start[m + 1]);
                     // the cell's bodies after i (in increasing order): mostly all or none of them
@@ -228,56 +235,65 @@ impl<'a> Neighbourhood<'a> {
         (0..RUN).fold(0, |bits, k| bits | u32::from(self.near(i, &[xs[k], ys[k], zs[k]])) << k)
     }
 
-    /// The bins, unless a list made ahead is used instead.
-    fn grid(&self) -> Option<&Bins> {
-        self.bins.as_ref().filter(|_| self.listed.is_none())
-    }
-
-    /// How many parts `each_unordered` can split the pairs into: the grid's cells, else the
-    /// bodies.
+    /// How many parts `each_unordered` can split the pairs into: the lists made ahead, the
+    /// grid's cells, else the bodies.
     pub fn parts(&self) -> usize {
-        self.grid().map_or(self.x.len(), |b| b.start.len() - 1)
+        let cells = self.bins.as_ref().map_or(self.x.len(), |b| b.start.len() - 1);
+        self.listed.map_or(cells, |l| l.bodies.len())
     }
 
-    /// `f(pairs)` for the pairs within reach whose first body (by a list, the double loop) or
-    /// cell (by the grid) is in `part`, a range of `0..parts()` — every pair within reach once over all
-    /// parts, as (i < j), in batches and in no fixed order: for sums that do not depend on it
-    /// (`ExactSum`). The grid pairs each cell with itself and with the 13 neighbours of its half
-    /// shell (`Grid::half_shell`), which holds every pair of adjacent cells once; the distance
-    /// test is the same, and gives the same answer for (j, i) as for (i, j) (a rounded
-    /// difference, its image and its square are odd or even in it), so the pairs are exactly
-    /// those of `of`.
+    /// `f(pairs)` for the pairs within reach whose first body (by the double loop), whose list
+    /// (by a list made ahead) or whose cell (by the grid) is in `part`, a range of `0..parts()` —
+    /// every pair within reach once over all parts, as (i < j), in batches and in no fixed
+    /// order: for sums that do not depend on it (`ExactSum`). The grid and the list hold every
+    /// pair of adjacent cells once (`half_shells`); the distance test is the same, and gives the
+    /// same answer for (j, i) as for (i, j) (a rounded difference, its image and its square are
+    /// odd or even in it), so the pairs are exactly those of `of`.
     pub fn each_unordered(&self, part: Range<usize>, mut f: impl FnMut(&[Near])) {
         let mut pairs = vec![];
-        match self.grid() {
-            // a few bodies' pairs at a time, so that few groups of four are left short
-            None => {
-                self.each(part, |i, js| {
-                    pairs.extend(js.iter().map(|&j| Near { i, j }));
-                    if pairs.len() >= 256 {
-                        f(&pairs);
-                        pairs.clear();
-                    }
-                });
+        // a few bodies' pairs at a time, so that few groups of four are left short
+        let mut add = |i: usize, j: usize| {
+            pairs.push(Near { i: i.min(j), j: i.max(j) });
+            if pairs.len() >= 256 {
                 f(&pairs);
+                pairs.clear();
             }
-            Some(b) => {
-                // cell m's bodies and then its half shell's, side by side: one run to test
-                // each of m's bodies against, instead of one per neighbouring cell
-                let (mut near, mut placed): (Vec<usize>, [Vec<f64>; 3]) = Default::default();
-                for m in part {
-                    near.clear();
-                    placed.iter_mut().for_each(Vec::clear);
-                    b.copy_cell(m, &mut near, &mut placed);
-                    b.grid.half_shell(m, |n| b.copy_cell(n, &mut near, &mut placed));
-                    placed.iter_mut().for_each(|p| p.extend([f64::NAN; RUN]));
-                    pairs.clear();
-                    for (q, &i) in b.members[b.start[m]..b.start[m + 1]].iter().enumerate() {
-                        let after = placed.each_ref().map(|p| &p[q + 1..]);
-                        self.test_run(i, &near[q + 1..], after, |j| pairs.push(Near { i: i.min(j), j: i.max(j) }));
+        };
+        match (self.listed, &self.bins) {
+            (Some(l), _) => {
+                for p in part {
+                    let i = l.bodies[p] as usize;
+                    for run in l.after[l.start[p]..l.start[p + 1]].chunks(RUN) {
+                        let mut placed = [[f64::NAN; RUN]; 3];
+                        for (k, &j) in run.iter().enumerate() {
+                            (0..3).for_each(|a| placed[a][k] = self.x[j as usize][a]);
+                        }
+                        each_kept(self.passed(i, placed.each_ref()), |k| add(i, run[k] as usize));
                     }
-                    f(&pairs);
                 }
+            }
+            (None, Some(b)) => self.half_shells(b, part, add),
+            (None, None) => self.each(part, |i, js| js.iter().for_each(|&j| add(i, j))),
+        }
+        f(&pairs);
+    }
+
+    /// `f(i, j)` for each body i of the cells `cells` in turn and each body j within reach of
+    /// it, after i in its cell or in its cell's half shell (`Grid::half_shell`), below or above
+    /// i: over every cell, each pair of adjacent cells is paired once, so each pair within reach
+    /// comes once.
+    fn half_shells(&self, b: &Bins, cells: Range<usize>, mut f: impl FnMut(usize, usize)) {
+        // cell m's bodies and then its half shell's, side by side: one run to test each of m's
+        // bodies against, instead of one per neighbouring cell
+        let (mut near, mut placed): (Vec<usize>, [Vec<f64>; 3]) = Default::default();
+        for m in cells {
+            near.clear();
+            placed.iter_mut().for_each(Vec::clear);
+            b.copy_cell(m, &mut near, &mut placed);
+            b.grid.half_shell(m, |n| b.copy_cell(n, &mut near, &mut placed));
+            placed.iter_mut().for_each(|p| p.extend([f64::NAN; RUN]));
+            for (q, &i) in b.members[b.start[m]..b.start[m + 1]].iter().enumerate() {
+                self.test_run(i, &near[q + 1..], placed.each_ref().map(|p| &p[q + 1..]), |j| f(i, j));
             }
         }
     }
@@ -425,6 +441,16 @@ mod tests {
         out
     }
 
+    /// The pairs `each_unordered` lists over every part, split at `cut`, sorted.
+    fn unordered(near: &Neighbourhood, cut: usize) -> Vec<Near> {
+        let mut all = vec![];
+        let split = cut.min(near.parts());
+        near.each_unordered(split..near.parts(), |p| all.extend_from_slice(p));
+        near.each_unordered(0..split, |p| all.extend_from_slice(p));
+        all.sort_by_key(|p| (p.i, p.j));
+        all
+    }
+
     /// Whether sorted `a` is within sorted `b`.
     fn within_list(a: &[Near], b: &[Near]) -> bool {
         let mut b = b.iter();
@@ -454,12 +480,7 @@ mod tests {
             let run: Vec<Near> = found.iter().copied().filter(|p| (a..b).contains(&p.i)).collect();
             prop_assert_eq!(near.of(a..b), run);
             // and the pairs listed in no order, cell by cell, in any split into parts, are the same
-            let mut unordered = vec![];
-            let split = cut.min(near.parts());
-            near.each_unordered(split..near.parts(), |p| unordered.extend_from_slice(p));
-            near.each_unordered(0..split, |p| unordered.extend_from_slice(p));
-            unordered.sort_by_key(|p| (p.i, p.j));
-            prop_assert_eq!(unordered, found);
+            prop_assert_eq!(unordered(&near, cut), found);
         }
     }
 
@@ -488,8 +509,9 @@ mod tests {
 
     proptest! {
         /// A list made ahead, from bodies that then moved by up to 0.4 of the skin, holds: it
-        /// is used, and gives the grid's pairs, in its order — bodies crossing the box's faces
-        /// (wrapped back in) included. A body moved by 0.6 of the skin makes it unused.
+        /// is used, and gives the grid's pairs, in any split into parts — bodies crossing the
+        /// box's faces (wrapped back in) included; asked for pairs in order, the grid is built.
+        /// A body moved by 0.6 of the skin makes it unused.
         #[test]
         fn a_list_made_ahead_gives_the_pairs_of_the_grid(
             pts in prop::collection::vec(prop::array::uniform3(0.0f64..12.0), 64..400),
@@ -509,7 +531,7 @@ mod tests {
             let later = moved(most);
             let near = Neighbourhood::new(&later, &cell, Some(reach), &ahead);
             prop_assert!(near.listed.is_some());
-            prop_assert_eq!(near.of(0..later.len()), within(&later, &cell, Some(reach)));
+            prop_assert_eq!(unordered(&near, far * 5), within(&later, &cell, Some(reach)));
             let run = far..(far + 30).min(later.len());
             prop_assert_eq!(near.of(run.clone()), Neighbourhood::new(&later, &cell, Some(reach), &[]).of(run));
             // one body moved too far: the list is not used, the grid is
@@ -517,7 +539,7 @@ mod tests {
             strayed[far][0] = pts[far][0] + 0.6 * SKIN * reach;
             let near = Neighbourhood::new(&strayed, &cell, Some(reach), &ahead);
             prop_assert!(near.listed.is_none());
-            prop_assert_eq!(near.of(0..strayed.len()), within(&strayed, &cell, Some(reach)));
+            prop_assert_eq!(unordered(&near, far), within(&strayed, &cell, Some(reach)));
             // nor for another reach
             prop_assert!(Neighbourhood::new(&later, &cell, Some(reach * 1.01), &ahead).listed.is_none());
         }
