@@ -225,11 +225,12 @@ fn truncated_and_wrong_version_certificates_are_rejected() {
 #[test]
 fn nan_infinite_subnormal_and_huge_coordinates_never_pass() {
     // A tiny velocity where there was none leaves the claims true but the states are not the
-    // certified ones: the momentum's enclosure, re-derived, moves. (A subnormal one can leave
-    // every enclosure the same to the bit: the certificate then still tells the truth about the
-    // states it is checked against.)
+    // certified ones: the momentum's enclosure, re-derived, moves. (One below 2⁻⁵¹¹ ≈ 1.5e-154,
+    // the least step outward of the checker's arithmetic, can leave every enclosure the same to
+    // the bit: the certificate then still tells the truth about the states it is checked
+    // against.)
     let r = oscillator();
-    edit_states(&r, true, |b| set_f64(b, velocity_at(3000, 0, 1), 1e-300));
+    edit_states(&r, true, |b| set_f64(b, velocity_at(3000, 0, 1), 1e-150));
     let (code, out, _) = with_states(&r);
     assert_eq!(code, 1);
     assert!(out.contains("DISAGREES with the certificate: momentum_conservation at step 3000"), "{out}");

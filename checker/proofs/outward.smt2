@@ -5,9 +5,9 @@
 ;    so with nothing in between, succ(RN(x)) ≥ RU(x) ≥ x and pred(RN(x)) ≤ RD(x) ≤ x, overflow
 ;    to ±∞ included. √ is left to the tests: z3 did not settle it within ten minutes here (its
 ;    enclosure is tested against MPFR, rounded both ways).
-; 2. `up(r) = fma(|r|, 2⁻⁵², r + 2⁻¹⁰²²)` (one rounding of r + |r|·2⁻⁵² + 2⁻¹⁰²², after the
-;    rounded r + 2⁻¹⁰²²) is above every finite r, so at or above succ(r), and leaves +∞ as it
-;    is; `down(r) = −fma(|r|, 2⁻⁵², 2⁻¹⁰²² − r)` likewise below, leaving −∞. (−∞ under `up` and
+; 2. `up(r) = fma(|r|, 2⁻⁵², r + 2⁻⁵¹¹)` (one rounding of r + |r|·2⁻⁵² + 2⁻⁵¹¹, after the
+;    rounded r + 2⁻⁵¹¹) is above every finite r, so at or above succ(r), and leaves +∞ as it
+;    is; `down(r) = −fma(|r|, 2⁻⁵², 2⁻⁵¹¹ − r)` likewise below, leaving −∞. (−∞ under `up` and
 ;    +∞ under `down` give NaN, which the code takes for "nothing known".) With 1,
 ;    up(RN(x)) ≥ x ≥ down(RN(x)).
 ; Run: z3 checker/proofs/outward.smt2 (expect twelve `unsat`; about two minutes).
@@ -25,9 +25,9 @@
 (push) (assert (and (fp.lt (fp.div RTN a b) f) (fp.lt f (fp.div RNE a b)))) (check-sat) (pop)
 (declare-const r Float64)
 (define-fun ulp1 () Float64 (fp #b0 #b01111001011 #x0000000000000)) ; 2^-52
-(define-fun least-normal () Float64 (fp #b0 #b00000000001 #x0000000000000)) ; 2^-1022
-(define-fun up () Float64 (fp.fma RNE (fp.abs r) ulp1 (fp.add RNE r least-normal)))
-(define-fun down () Float64 (fp.neg (fp.fma RNE (fp.abs r) ulp1 (fp.sub RNE least-normal r))))
+(define-fun floor () Float64 (fp #b0 #b01000000000 #x0000000000000)) ; 2^-511
+(define-fun up () Float64 (fp.fma RNE (fp.abs r) ulp1 (fp.add RNE r floor)))
+(define-fun down () Float64 (fp.neg (fp.fma RNE (fp.abs r) ulp1 (fp.sub RNE floor r))))
 (push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.gt up r)))) (check-sat) (pop)
 (push) (assert (and (not (fp.isNaN r)) (not (fp.isInfinite r)) (not (fp.lt down r)))) (check-sat) (pop)
 (push) (assert (and (fp.isInfinite r) (fp.isPositive r) (not (fp.eq up r)))) (check-sat) (pop)

@@ -16,10 +16,11 @@ pub const FORMAT: &str = "lagra-certificate/1";
 /// re-derives the marks bit for bit only in the same; a change that moves any bit of an
 /// enclosure gets a new name (`tests::the_arithmetic_revision_names_these_bits` holds one
 /// enclosure's bits to this name, and fails until both are updated). A date, with a letter
-/// for a second revision the same day: "2026-11-26b" chooses periodic images with ties to
-/// even (a pair exactly half a box apart along an axis, which moves a bit only where a term
-/// reaches exactly that far).
-pub const ARITHMETIC: &str = "2026-11-26b";
+/// for a later revision the same day: "2026-11-26b" chose periodic images with ties to even (a
+/// pair exactly half a box apart along an axis, which moves a bit only where a term reaches
+/// exactly that far); "2026-11-26c" steps outward by at least 2⁻⁵¹¹ instead of 2⁻¹⁰²² (which
+/// moves only the ends of enclosures within ~10⁻¹⁵³ of zero).
+pub const ARITHMETIC: &str = "2026-11-26c";
 
 /// One checkpoint's enclosure `[lo, hi]` of a claim's deviation, the tolerance it was held to
 /// (declared, or the round-off budget at that step) and the precision that produced the
@@ -186,9 +187,10 @@ mod tests {
     use crate::terms::Kind;
 
     /// An energy mark of a small scene (Lennard-Jones pairs, a bond, kinetic energy) at its
-    /// second state: if any bit of it moves, the checker's arithmetic changed, and `ARITHMETIC`
-    /// must get a new name along with the bits written here (certificates of the old name can
-    /// then no longer be re-checked to the bit, and `recheck` says why).
+    /// second state, and a momentum mark of the same scene at rest (an enclosure of zero, so of
+    /// the step outward's floor): if any bit of them moves, the checker's arithmetic changed,
+    /// and `ARITHMETIC` must get a new name along with the bits written here (certificates of
+    /// the old name can then no longer be re-checked to the bit, and `recheck` says why).
     #[test]
     fn the_arithmetic_revision_names_these_bits() {
         let body = Body { mass: 1.5, charge: 0.0, colour: [0.0; 2], moments: None, solid: None };
@@ -204,20 +206,22 @@ mod tests {
             thermostat: None,
             floor: None,
         };
-        let claims = vec![Claim::new(ClaimKind::EnergyConservation, Some(1e-3), 1)];
-        let mut monitor = Monitor::new(model, claims, 1).unwrap();
         let x = |d: f64| [[0.0, 0.0, 0.0], [1.1 + d, 0.1, 0.0], [0.3, 1.2, -0.1], [1.4, 1.1, 0.9], [-0.8, 0.6, 1.3]];
+        let mark = |kind: ClaimKind, v: &[[f64; 3]]| {
+            let mut monitor = Monitor::new(model.clone(), vec![Claim::new(kind, Some(1e-3), 1)], 1).unwrap();
+            for (step, d) in [(0, 0.0), (1, 1e-4)] {
+                let x = x(d);
+                monitor.observe(&Snapshot { step, t: step as f64 * 0.01, x: &x, v, chain: &[], spin: &[] }).unwrap();
+            }
+            let mark = monitor.finish().trails[0].marks[0];
+            assert_eq!(mark.step, 1);
+            (mark.lo.to_bits(), mark.hi.to_bits())
+        };
         let v = [[0.1, -0.2, 0.3], [0.0, 0.5, -0.1], [-0.3, 0.1, 0.2], [0.2, 0.2, -0.4], [0.0, -0.3, 0.1]];
-        for (step, d) in [(0, 0.0), (1, 1e-4)] {
-            let x = x(d);
-            let s = Snapshot { step, t: step as f64 * 0.01, x: &x, v: &v, chain: &[], spin: &[] };
-            monitor.observe(&s).unwrap();
-        }
-        let mark = monitor.finish().trails[0].marks[0];
-        assert_eq!(mark.step, 1);
-        let bits = (mark.lo.to_bits(), mark.hi.to_bits());
-        assert_eq!(bits, (0x3ee6_4c9e_2836_f20f, 0x3ee6_4c9e_2a90_f429), "the arithmetic moved: name a new ARITHMETIC");
-        assert_eq!(ARITHMETIC, "2026-11-26b");
+        let moved = "the arithmetic moved: name a new ARITHMETIC";
+        assert_eq!(mark(ClaimKind::EnergyConservation, &v), (0x3ee6_4c9e_2836_f20f, 0x3ee6_4c9e_2a90_f429), "{moved}");
+        assert_eq!(mark(ClaimKind::MomentumConservation, &[[0.0; 3]; 5]), (0, 0x2045_0000_0000_0004), "{moved}");
+        assert_eq!(ARITHMETIC, "2026-11-26c");
     }
 
     #[test]

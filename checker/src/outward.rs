@@ -149,28 +149,36 @@ fn most(a: f64, b: f64) -> f64 {
     pick(a > b, a, b)
 }
 
-/// A binary64 value above r: r + |r|·2⁻⁵² + 2⁻¹⁰²², rounded once (one fused multiply-add), a
-/// few neighbours or 2⁻¹⁰²¹ up at most. |r|·2⁻⁵² is at least r's ulp, and 2⁻¹⁰²² at least the gap
-/// to a neighbour near zero, so the exact sum is above succ(r) and rounds to a value at or
-/// above it: z3 proves up(r) > r for every finite binary64 r (`checker/proofs/outward.smt2`).
+/// The least step outward, 2⁻⁵¹¹: its square is the least normal binary64 value, 2⁻¹⁰²².
+const FLOOR: f64 = f64::from_bits(0x2000_0000_0000_0000);
+
+/// A binary64 value above r: r + |r|·2⁻⁵² + 2⁻⁵¹¹ (`FLOOR`), rounded once (one fused
+/// multiply-add after r + 2⁻⁵¹¹), a few neighbours or 2⁻⁵¹⁰ up at most. |r|·2⁻⁵² is at least
+/// r's ulp, and 2⁻⁵¹¹ at least the gap to a neighbour near zero, so the exact sum is above
+/// succ(r) and rounds to a value at or above it: z3 proves up(r) > r for every finite binary64
+/// r (`checker/proofs/outward.smt2`). Above 2⁻⁴⁵⁸ in magnitude r + 2⁻⁵¹¹ rounds to r and the floor
+/// moves no bit.
 /// +∞ stays; −∞ gives NaN (∞ − ∞), so an upper end that overflowed to −∞ makes the enclosure
 /// unknown rather than −MAX: sound, and no branch, where `f64::next_up` tests for NaN, ∞, zero
 /// and sign. Three instructions (|r|, the addition of the floor, the FMA), half of what a
 /// floor applied by a compare and the infinities by a test cost, and the operations of a pair
-/// term are mostly these steps. No subnormal operand for |r| ≥ 2⁻¹⁰²¹: the floor is the least
-/// *normal* value. Intel cores take a microcode assist of ~40 ns for a subnormal addend in an
-/// FMA (the step `|r|·2⁻⁵² + 2⁻¹⁰⁷⁴` once did that at every operation, and made the checker
-/// four times slower there than on AMD).
+/// term are mostly these steps. Why the floor is 2⁻⁵¹¹ and not less: Intel cores take a
+/// microcode assist of ~40 ns for a subnormal operand and for a result that underflows (the
+/// step `|r|·2⁻⁵² + 2⁻¹⁰⁷⁴` once put a subnormal into every operation, and made the checker four
+/// times slower there than on AMD). A coordinate difference or a speed that is exactly zero
+/// (bodies on a lattice, in a plane, at rest) steps out to ±2⁻⁵¹¹, not ±2⁻¹⁰²², whose square
+/// underflowed; so near zero every end the arithmetic makes is 0 or about 2⁻⁵¹¹ or more, and
+/// their products stay normal (`tests/subnormal.rs` reads the CPU's flags over every scene).
 #[inline(always)]
 fn up(r: f64) -> f64 {
-    r.abs().mul_add(f64::EPSILON, r + f64::MIN_POSITIVE)
+    r.abs().mul_add(f64::EPSILON, r + FLOOR)
 }
 
-/// A binary64 value below r: −up(−r), a few neighbours or 2⁻¹⁰²¹ down at most (−∞ stays, +∞
+/// A binary64 value below r: −up(−r), a few neighbours or 2⁻⁵¹⁰ down at most (−∞ stays, +∞
 /// gives NaN).
 #[inline(always)]
 fn down(r: f64) -> f64 {
-    -r.abs().mul_add(f64::EPSILON, f64::MIN_POSITIVE - r)
+    -r.abs().mul_add(f64::EPSILON, FLOOR - r)
 }
 
 impl Add for Outward {
@@ -338,9 +346,9 @@ mod tests {
         (lo, hi)
     }
 
-    /// `up(r)` is above r's neighbour, and no farther than three neighbours or 2⁻¹⁰²¹.
+    /// `up(r)` is above r's neighbour, and no farther than three neighbours or 2⁻⁵¹⁰.
     fn passes_up(r: f64) -> bool {
-        let near = r.next_up().next_up().next_up().max(r + 2.0 * f64::MIN_POSITIVE);
+        let near = r.next_up().next_up().next_up().max(r + 2.0 * FLOOR);
         up(r) >= r.next_up() && up(r) <= near
     }
 
@@ -349,22 +357,29 @@ mod tests {
         passes_up(-r) && -down(r) == up(-r)
     }
 
-    /// The hot path's operations meet no subnormal: for |r| ≥ 2⁻¹⁰²¹ the step outward's FMA
-    /// multiplies and adds normal values (the trap this avoids costs ~40 ns an operation on
-    /// Intel cores); at zero its addend is the least normal value (only a subnormal r, or one
-    /// within 2⁻¹⁰²² of −2⁻¹⁰²², puts a subnormal into the step).
+    /// A zero steps out to ±2⁻⁵¹¹, and what an enclosure of zero leads to by products, squares
+    /// and sums has ends that are 0 or normal, never subnormal: no operation on them underflows
+    /// (the CPU's own flags for that are read over every scene in `tests/subnormal.rs`).
     #[test]
-    fn the_step_outward_adds_no_subnormal() {
-        for r in [2.0 * f64::MIN_POSITIVE, 1e-300, 1e-200, 1.0, 3.5, 1e300, f64::MAX] {
-            for r in [r, -r] {
-                assert!(r.abs().is_normal() && (r + f64::MIN_POSITIVE).is_normal(), "{r:e}");
-                assert!((f64::MIN_POSITIVE - r).is_normal(), "{r:e}");
-                // and the step's result, an operand of the next operation
-                assert!(r.abs() < 1e-300 || !up(r).is_subnormal() && !down(r).is_subnormal(), "{r:e}");
-            }
+    fn a_zero_steps_out_to_ends_whose_products_stay_normal() {
+        assert_eq!(FLOOR * FLOOR, f64::MIN_POSITIVE);
+        let zero = Outward::point(1.5) - Outward::point(1.5);
+        assert_eq!((zero.lo, zero.hi), (-FLOOR, FLOOR));
+        let normal_or_zero = |o: Outward| [o.lo, o.hi].iter().all(|e| *e == 0.0 || e.is_normal());
+        let quarter = Outward::point(0.25);
+        for o in [zero.powi(2), zero * zero, zero.powi(3), zero.powi(4), zero.powi(2) * zero, zero * quarter] {
+            assert!(normal_or_zero(o) && normal_or_zero(o + zero.powi(2)), "{o:?}");
         }
-        for r in [0.0, -0.0] {
-            assert!((r + f64::MIN_POSITIVE).is_normal() && (f64::MIN_POSITIVE - r).is_normal(), "{r:e}");
+    }
+
+    proptest! {
+        /// Above 2⁻⁴⁵⁸ in magnitude the floor moves no bit of a step outward: there r + 2⁻⁵¹¹
+        /// rounds to r, and the step is r ± |r|·2⁻⁵² rounded once.
+        #[test]
+        fn the_floor_moves_no_bit_above_its_scale(m in 1.0f64..2.0, e in -458i32..1023, negative in any::<bool>()) {
+            let r = if negative { -m } else { m } * 2f64.powi(e);
+            prop_assert_eq!(up(r), r.abs().mul_add(f64::EPSILON, r));
+            prop_assert_eq!(down(r), -r.abs().mul_add(f64::EPSILON, -r));
         }
     }
 
@@ -430,7 +445,7 @@ mod tests {
             );
         }
 
-        /// `up` and `down` pass a value's neighbours, by a few steps, or by at most 2⁻¹⁰²¹ near
+        /// `up` and `down` pass a value's neighbours, by a few steps, or by at most 2⁻⁵¹⁰ near
         /// zero.
         #[test]
         fn up_and_down_pass_the_neighbours(r in value().prop_filter("finite", |r| r.is_finite())) {
@@ -508,7 +523,7 @@ mod tests {
             assert!(passes_up(r), "{r:e}: {:e}", up(r));
             assert!(passes_down(r), "{r:e}: {:e}", down(r));
         }
-        assert_eq!((up(0.0), down(0.0)), (f64::MIN_POSITIVE, -f64::MIN_POSITIVE));
+        assert_eq!((up(0.0), down(0.0)), (FLOOR, -FLOOR));
         assert_eq!((up(f64::INFINITY), down(f64::NEG_INFINITY)), (f64::INFINITY, f64::NEG_INFINITY));
         assert!(up(f64::NEG_INFINITY).is_nan() && down(f64::INFINITY).is_nan());
         assert!(up(f64::NAN).is_nan() && down(f64::NAN).is_nan());
