@@ -6,8 +6,10 @@
 #
 #     bash bench/checker_cost.sh ROUNDS STEPS BINARY [BINARY...]
 #
-# Prints each wall time, then per binary and CPU count the overhead, fastest against fastest
-# and median against median, and as each checked run measures it itself (`checker_s`: the
+# Prints each wall time, then per binary and CPU count the overhead, fastest against fastest,
+# median against median, and paired (each checked run against the run without claims just
+# before it, the median of those ratios: the least moved by the machine's drift), and as each
+# checked run measures it itself (`checker_s`: the
 # checker's CPU time judging, its cost on one CPU; `checker_wait_s`: the kernel's time waiting
 # for it, its cost on two), the median share of the rest of the run.
 set -euo pipefail
@@ -28,9 +30,12 @@ python3 - "$out" <<'PY'
 import collections, statistics, sys
 d = collections.defaultdict(list)
 inside = collections.defaultdict(list)
+paired = collections.defaultdict(list)
 for line in open(sys.argv[1]):
     cpus, b, s, t, judging, waiting = line.split()
     d[(cpus, b, s)].append(float(t))
+    if s == "checked":
+        paired[(cpus, b)].append(float(t) / d[(cpus, b, "shifted")][-1] - 1)
     if s == "checked":
         # within the run: on one CPU the checker's CPU time judging, on two the kernel's wait,
         # against the rest of the run
@@ -39,7 +44,8 @@ for line in open(sys.argv[1]):
 for (cpus, b) in sorted({(c, b) for c, b, _ in d}):
     c, u = d[(cpus, b, "checked")], d[(cpus, b, "shifted")]
     print(f"{b} on CPUs {cpus}: overhead {100 * (min(c) / min(u) - 1):.1f}% fastest/fastest, "
-          f"{100 * (statistics.median(c) / statistics.median(u) - 1):.1f}% median/median "
+          f"{100 * (statistics.median(c) / statistics.median(u) - 1):.1f}% median/median, "
+          f"{100 * statistics.median(paired[(cpus, b)]):.1f}% paired median "
           f"(without claims {min(u):.3f} s, with {min(c):.3f} s); within the run "
           f"{'judging' if cpus == '0' else 'waiting'} {statistics.median(inside[(cpus, b)]):.1f}% median")
 PY
