@@ -156,8 +156,8 @@ const FLOOR: f64 = f64::from_bits(0x2000_0000_0000_0000);
 /// multiply-add after r + 2⁻⁵¹¹), a few neighbours or 2⁻⁵¹⁰ up at most. |r|·2⁻⁵² is at least
 /// r's ulp, and 2⁻⁵¹¹ at least the gap to a neighbour near zero, so the exact sum is above
 /// succ(r) and rounds to a value at or above it: z3 proves up(r) > r for every finite binary64
-/// r (`checker/proofs/outward.smt2`). Above 2⁻⁴⁵⁸ in magnitude r + 2⁻⁵¹¹ rounds to r and the floor
-/// moves no bit.
+/// r (`checker/proofs/outward.smt2`). From 2⁻⁴⁵⁷ in magnitude up, r + 2⁻⁵¹¹ rounds to r (at
+/// most half of half an ulp away, or a tie that rounds to r) and the floor moves no bit.
 /// +∞ stays; −∞ gives NaN (∞ − ∞), so an upper end that overflowed to −∞ makes the enclosure
 /// unknown rather than −MAX: sound, and no branch, where `f64::next_up` tests for NaN, ∞, zero
 /// and sign. Three instructions (|r|, the addition of the floor, the FMA), half of what a
@@ -373,13 +373,19 @@ mod tests {
     }
 
     proptest! {
-        /// Above 2⁻⁴⁵⁸ in magnitude the floor moves no bit of a step outward: there r + 2⁻⁵¹¹
-        /// rounds to r, and the step is r ± |r|·2⁻⁵² rounded once.
+        /// From 2⁻⁴⁵⁷ in magnitude up the floor moves no bit of a step outward: there r + 2⁻⁵¹¹
+        /// rounds to r, and the step is r ± |r|·2⁻⁵² rounded once. (At 2⁻⁴⁵⁸ it does: 2⁻⁵¹¹ is
+        /// half an ulp there, and a tie can round away from r.)
         #[test]
-        fn the_floor_moves_no_bit_above_its_scale(m in 1.0f64..2.0, e in -458i32..1023, negative in any::<bool>()) {
-            let r = if negative { -m } else { m } * 2f64.powi(e);
-            prop_assert_eq!(up(r), r.abs().mul_add(f64::EPSILON, r));
-            prop_assert_eq!(down(r), -r.abs().mul_add(f64::EPSILON, -r));
+        fn the_floor_moves_no_bit_above_its_scale(m in 1.0f64..2.0, e in -457i32..1023, negative in any::<bool>()) {
+            let unmoved = |r: f64| up(r) == r.abs().mul_add(f64::EPSILON, r) && down(r) == -r.abs().mul_add(f64::EPSILON, -r);
+            let sign = if negative { -1.0 } else { 1.0 };
+            prop_assert!(unmoved(sign * m * 2f64.powi(e)));
+            // the edges of the scale, exactly
+            for m in [1.0, 1.0 + f64::EPSILON, 2.0 - f64::EPSILON] {
+                prop_assert!(unmoved(sign * m * 2f64.powi(-457)));
+                prop_assert!(!unmoved(sign * (1.0 + f64::EPSILON) * 2f64.powi(-458)));
+            }
         }
     }
 
