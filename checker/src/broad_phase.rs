@@ -17,6 +17,7 @@
 
 use crate::model::{Cell, Images};
 use std::ops::Range;
+use std::sync::OnceLock;
 
 /// Below this many bodies the double loop is as cheap as the grid.
 const GRID_FROM: usize = 64;
@@ -56,6 +57,9 @@ pub struct Neighbourhood<'a> {
     limit: f64,
     bins: Option<Bins>,
     listed: Option<&'a Foreseen>,
+    /// With a list made ahead, the grid after all, built the first time sorted pairs are asked
+    /// for (`each`), once for every run of bodies.
+    gridded: OnceLock<Box<Neighbourhood<'a>>>,
 }
 
 /// The pairs within reach·(1 + SKIN) of a state a few steps before a checkpoint, listed while
@@ -168,7 +172,7 @@ impl<'a> Neighbourhood<'a> {
             let placed = std::array::from_fn(|a| members.iter().map(|&i| x[i][a]).chain([f64::NAN; RUN]).collect());
             Bins { grid, cells, start, members, placed }
         });
-        Neighbourhood { x, cell, reach, images, limit, bins, listed }
+        Neighbourhood { x, cell, reach, images, limit, bins, listed, gridded: OnceLock::new() }
     }
 
     /// Whether `xj`, body j's position, has its nearest image within reach of body i.
@@ -187,10 +191,11 @@ impl<'a> Neighbourhood<'a> {
 
     /// `f(i, js)` for each i in `bodies` in turn, js being the bodies j > i within reach of i,
     /// increasing. A list made ahead holds a pair under either body, so the grid is built here
-    /// instead (the checker's own sums, which use the list, take their pairs in no order).
+    /// instead, once (the checker's own sums, which use the list, take their pairs in no order).
     fn each(&self, bodies: Range<usize>, mut f: impl FnMut(usize, &[usize])) {
         if self.listed.is_some() {
-            return Neighbourhood::new(self.x, self.cell, self.reach, &[]).each(bodies, f);
+            let grid = self.gridded.get_or_init(|| Box::new(Neighbourhood::new(self.x, self.cell, self.reach, &[])));
+            return grid.each(bodies, f);
         }
         let mut js = vec![];
         for i in bodies {
@@ -534,6 +539,11 @@ mod tests {
             prop_assert_eq!(unordered(&near, far * 5), within(&later, &cell, Some(reach)));
             let run = far..(far + 30).min(later.len());
             prop_assert_eq!(near.of(run.clone()), Neighbourhood::new(&later, &cell, Some(reach), &[]).of(run));
+            // sorted pairs come from a grid built for the first run asked for, and kept
+            let grid = near.gridded.get().map(|g| &**g as *const Neighbourhood);
+            prop_assert!(grid.is_some());
+            prop_assert_eq!(near.of(0..later.len()), within(&later, &cell, Some(reach)));
+            prop_assert_eq!(near.gridded.get().map(|g| &**g as *const Neighbourhood), grid);
             // one body moved too far: the list is not used, the grid is
             let mut strayed = later.clone();
             strayed[far][0] = pts[far][0] + 0.6 * SKIN * reach;
