@@ -4,10 +4,11 @@ use clap::{Parser, Subcommand};
 use lagra::{bench, check, grad, lean, list, mcp, noether, run, terms, view};
 use std::process::ExitCode;
 
-/// mimalloc keeps the memory a step or a checkpoint frees for the next one to reuse. With the
-/// system allocator each fresh buffer (a step's forces, a checkpoint's sites) was page-faulted
-/// in again: 12,280 faults in a 100-step 32,000-atom run against 312, and on two threads
-/// 134–147 → 119–120 ns/atom-step over 1,000 steps (docs/bench/README.md).
+/// mimalloc, for its heaps per thread: the kernel on two threads, 1,000 steps of 32,000 atoms,
+/// 143–153 → 118–135 ns/atom-step with the system allocator's arenas replaced; one thread
+/// unchanged (docs/bench/README.md). Its transparent huge pages are off (`no_thp`): they cut a
+/// 100-step run's page faults from ~12,000 to ~300 but stalled some checkpoints by 10–20 ms
+/// (a huge page's fault can compact memory first on this machine).
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
