@@ -54,25 +54,32 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
     range: Range<usize>,
     f: &mut [Cluster],
 ) -> Sum {
-    let body = || portable::<T, ENERGY>(l, row, traits, range, f);
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx512vl") {
         // SAFETY: the CPU has the features `wide_registers` is compiled for, checked just above.
-        return unsafe { wide_registers(body) };
+        return unsafe { wide_registers::<T, ENERGY>(l, row, traits, range, f) };
     }
-    body()
+    portable::<T, ENERGY>(l, row, traits, range, f)
 }
 
-/// `body` (the kernel, inlined into it) compiled for AVX-512: its vectors stay 256 bits wide
-/// (the same instructions on the same lanes, so the same bits), but the encoding has 32 vector
-/// registers instead of 16, enough for a cluster's twelve force accumulators and the row in
-/// flight, which otherwise spill to the stack in every row (1,000 steps of 32,000 LJ atoms:
-/// ~13% faster).
+/// `portable` compiled for AVX-512: its vectors stay 256 bits wide (the same instructions on
+/// the same lanes, so the same bits), but the encoding has 32 vector registers instead of 16,
+/// enough for a cluster's twelve force accumulators and the row in flight, which otherwise
+/// spill to the stack in every row (1,000 steps of 32,000 LJ atoms: ~13% faster). A function
+/// of its own rather than a closure passed in: `portable` is `inline(always)`, so it is
+/// compiled into this one for these features; a closure's call need not be inlined, and one
+/// tried was not (it ran at the portable speed).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 #[inline(never)]
-fn wide_registers<R>(body: impl FnOnce() -> R) -> R {
-    body()
+fn wide_registers<T: Paired, const ENERGY: bool>(
+    l: &Neighbours,
+    row: &T::Row,
+    traits: &[Traits],
+    range: Range<usize>,
+    f: &mut [Cluster],
+) -> Sum {
+    portable::<T, ENERGY>(l, row, traits, range, f)
 }
 
 #[inline(always)]
@@ -280,7 +287,7 @@ mod tests {
             let mut f = vec![[F64x4::default(); 3]; l.clusters()];
             let e = match wide {
                 // SAFETY: the CPU has AVX-512VL (the test returned above otherwise)
-                true => unsafe { wide_registers(|| portable::<T, true>(l, &row, traits, 0..l.clusters(), &mut f)) },
+                true => unsafe { wide_registers::<T, true>(l, &row, traits, 0..l.clusters(), &mut f) },
                 false => portable::<T, true>(l, &row, traits, 0..l.clusters(), &mut f),
             };
             (f.iter().flatten().flat_map(|c| c.to_array()).map(f64::to_bits).collect(), e.value().to_bits())

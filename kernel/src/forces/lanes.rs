@@ -6,7 +6,10 @@
 //! term to it). The build's baseline already has AVX and FMA (inari needs FMA, which implies
 //! AVX: `.cargo/config.toml`), so each operation is one 256-bit instruction on every machine
 //! that runs this build; a build without AVX gets `wide`'s SSE2 or portable code, with the same
-//! bits. (No runtime switch is needed: a machine without FMA cannot run Lagra at all.)
+//! bits. (No runtime switch is needed for that: a machine without FMA cannot run Lagra at all.)
+//! Where the CPU has AVX-512, the cluster kernel runs a second build of itself with 32 vector
+//! registers instead of 16 (`clusters::wide_registers`): the same 256-bit instructions, so the
+//! same bits.
 
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
 use wide::f64x4;
