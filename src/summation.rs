@@ -77,7 +77,8 @@ fn witnesses(model: &Model, s: &State) -> Witnesses {
         match t.kind.spec().shape {
             Shape::Pairwise => {
                 // the pairs within reach (the others add exact zeros)
-                let pairs = broad_phase::within(&s.x, &model.cell, t.kind.reach(&t.params));
+                let pairs =
+                    broad_phase::within(&s.x, &model.cell, Some(t.kind.reach(&t.params)).filter(|r| r.is_finite()));
                 energy.extend(pairs.iter().map(|p| v(&[site(p.i), seen(p.i, p.j)])));
             }
             Shape::Bond(_) => energy.push(v(&t.sites.iter().map(|&j| seen(t.sites[0], j)).collect::<Vec<_>>())),

@@ -13,7 +13,7 @@ use crate::mpfi::Mpfi;
 use crate::outward::Outward;
 use crate::quantities::{foresee, pair_reaches, Lifted};
 use crate::states::State;
-use crate::terms::Kind;
+use crate::terms::{Kind, Site};
 use std::sync::Arc;
 
 /// Unit round-off of binary64.
@@ -79,6 +79,8 @@ pub struct Monitor {
     threads: usize,
     /// The pair lists made ahead of the next checkpoint (`foresee`).
     ahead: Arc<[Foreseen]>,
+    /// The last checkpoint's sites, whose memory the next one reuses (`Lifted::reusing`).
+    sites: Vec<Site<Outward>>,
 }
 
 /// What the checker concluded about a run.
@@ -148,7 +150,8 @@ impl Monitor {
             .map(|claim| Track { judge: Judge::new(claim.kind), claim, marks: vec![], scale: 0.0, stopped: None })
             .collect();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads, ahead: Arc::default() })
+        let ahead = Arc::default();
+        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads, ahead, sites: vec![] })
     }
 
     /// Sums each checkpoint's pair terms on `n` threads (all the CPUs by default): one when
@@ -205,7 +208,9 @@ impl Monitor {
             }
             return Err(Halt::InvalidState(e));
         }
-        let q = Lifted::new(&self.model, s, &Outward::NAN).on_threads(self.threads).foreseeing(self.ahead.clone());
+        let q = Lifted::reusing(std::mem::take(&mut self.sites), &self.model, s, &Outward::NAN)
+            .on_threads(self.threads)
+            .foreseeing(self.ahead.clone());
         let model = &self.model;
         let first_state = self.reference.is_none();
         if first_state {
@@ -253,6 +258,7 @@ impl Monitor {
                 first.get_or_insert(Halt::Breach(b));
             }
         }
+        self.sites = q.into_sites();
         first.map_or(Ok(()), Err)
     }
 

@@ -33,19 +33,21 @@ pub struct Lifted<R> {
 
 impl<R: PairSum> Lifted<R> {
     pub fn new(model: &Model, s: &Snapshot, proto: &R) -> Self {
+        Lifted::reusing(Vec::new(), model, s, proto)
+    }
+
+    /// `new`, its sites written into `sites`'s memory (the sites of an earlier state,
+    /// `into_sites`): fresh memory for 32,000 sites is ~1,300 page faults, ~3 ms.
+    pub fn reusing(mut sites: Vec<Site<R>>, model: &Model, s: &Snapshot, proto: &R) -> Self {
         let lift3 = |a: &[f64; 3]| a.map(|c| proto.lift(c));
-        let sites = model
-            .bodies
-            .iter()
-            .zip(s.x.iter().zip(s.v))
-            .map(|(b, (x, v))| Site {
-                x: lift3(x),
-                v: lift3(v),
-                m: proto.lift(b.mass),
-                q: proto.lift(b.charge),
-                colour: b.colour.map(|c| proto.lift(c)),
-            })
-            .collect();
+        sites.clear();
+        sites.extend(model.bodies.iter().zip(s.x.iter().zip(s.v)).map(|(b, (x, v))| Site {
+            x: lift3(x),
+            v: lift3(v),
+            m: proto.lift(b.mass),
+            q: proto.lift(b.charge),
+            colour: b.colour.map(|c| proto.lift(c)),
+        }));
         // each instance's parameters, then its constants (`Definition::constants`), once
         let lifted = |t: &TermInstance| -> Vec<R> { t.params.iter().map(|&c| proto.lift(c)).collect() };
         let params = model.terms.iter().map(|t| [lifted(t), t.kind.constants(&lifted(t))].concat()).collect();
@@ -69,6 +71,11 @@ impl<R: PairSum> Lifted<R> {
             threads: 1,
             ahead: Arc::default(),
         }
+    }
+
+    /// The sites' memory, for the next state (`reusing`).
+    pub fn into_sites(self) -> Vec<Site<R>> {
+        self.sites
     }
 
     /// The same, summing pair terms on `n` threads.

@@ -31,7 +31,10 @@ impl Tail {
         let rho = model.bodies.len() as f64 / cell.size.iter().product::<f64>();
         let mut tail = Tail { energy_per_body: 0.0, pressure: 0.0 };
         for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
-            let Some(rc) = t.kind.reach(&t.params) else { continue };
+            let rc = t.kind.reach(&t.params);
+            if rc.is_infinite() {
+                continue;
+            }
             let reads = t.kind.reads();
             if reads.m || reads.q || reads.colour {
                 return Err(format!(

@@ -107,7 +107,8 @@ impl PairSum for Outward {
 /// The reach a pair term's broad phase is asked for: the term's, with a relative margin of
 /// 1e-6 on top (`None`: unbounded).
 pub fn asked_reach(t: &TermInstance) -> Option<f64> {
-    t.kind.reach(&t.params).map(|r| r * (1.0 + 1e-6))
+    let r = t.kind.reach(&t.params) * (1.0 + 1e-6);
+    r.is_finite().then_some(r)
 }
 
 /// The distinct reaches the model's pair terms ask their broad phase for (`asked_reach`; a pair
@@ -204,6 +205,28 @@ mod tests {
         let (lo, hi) = one.bounds();
         assert!(Float::with_val(256, lo) <= exact && exact <= Float::with_val(256, hi), "{one:?}");
         assert!(hi - lo <= 1e-11 * hi.abs().max(lo.abs()), "{one:?}");
+    }
+
+    /// A state lifted into the memory of another (`reusing`, as the monitor does from one
+    /// checkpoint to the next) is the same bits as one lifted fresh: from another state of the
+    /// same bodies, and from the sites of more bodies than it has.
+    #[test]
+    fn a_state_lifted_into_reused_memory_is_the_same_bits() {
+        let (m, x, v) = liquid();
+        let at = |x: &[[f64; 3]]| {
+            Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[], spin: &[] }, &Outward::NAN)
+        };
+        let moved: Vec<[f64; 3]> = x.iter().map(|p| p.map(|c| c * 1.001)).collect();
+        let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
+        let s = Snapshot { step: 0, t: 0.0, x: &x, v: &v, chain: &[], spin: &[] };
+        let reused = Lifted::reusing(at(&moved).into_sites(), &m, &s, &Outward::NAN);
+        assert_eq!(bits(reused.energy(&m)), bits(at(&x).energy(&m)));
+        assert_ne!(bits(at(&moved).energy(&m)), bits(at(&x).energy(&m)), "the states differ");
+        let few = Model { bodies: m.bodies[..100].to_vec(), ..m.clone() };
+        let s = Snapshot { step: 0, t: 0.0, x: &x[..100], v: &v[..100], chain: &[], spin: &[] };
+        let reused = Lifted::reusing(at(&x).into_sites(), &few, &s, &Outward::NAN);
+        assert_eq!(reused.sites.len(), 100);
+        assert_eq!(bits(reused.energy(&few)), bits(Lifted::new(&few, &s, &Outward::NAN).energy(&few)));
     }
 
     /// Four pairs at a time (`PairSum` for `Outward`), listed in any order and in parts, give

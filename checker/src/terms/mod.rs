@@ -126,10 +126,14 @@ pub trait Definition {
         false
     }
     /// The distance beyond which the term vanishes: its `cutoff` parameter if it has one, else
-    /// unbounded (`None`).
-    fn reach(p: &[f64]) -> Option<f64> {
-        let at = Self::SPEC.params.iter().position(|q| q.name == "cutoff")?;
-        Some(p[Self::SPEC.params[..at].iter().map(|q| q.len).sum::<usize>()])
+    /// ∞. A number on every path, not an `Option`: the compiler may compute with a value before
+    /// it tests which path it is on, and an empty `Option`'s payload is whatever was in the
+    /// register — a subnormal there raised DE/UE (tests/subnormal.rs).
+    fn reach(p: &[f64]) -> f64 {
+        match Self::SPEC.params.iter().position(|q| q.name == "cutoff") {
+            Some(at) => p[Self::SPEC.params[..at].iter().map(|q| q.len).sum::<usize>()],
+            None => f64::INFINITY,
+        }
     }
 }
 
@@ -173,7 +177,7 @@ macro_rules! vocabulary {
             pub fn dissipates(self, p: &[f64]) -> bool {
                 match self { $(Kind::$kind => $kind::dissipates(p)),* }
             }
-            pub fn reach(self, p: &[f64]) -> Option<f64> {
+            pub fn reach(self, p: &[f64]) -> f64 {
                 match self { $(Kind::$kind => $kind::reach(p)),* }
             }
         }

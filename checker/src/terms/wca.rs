@@ -25,7 +25,7 @@ impl Definition for Wca {
         cut(p, s, rc, |r2| lj(&p[0], &p[1], r2) + p[0].clone())
     }
 
-    fn reach(p: &[f64]) -> Option<f64> {
-        Some(MINIMUM * p[1])
+    fn reach(p: &[f64]) -> f64 {
+        MINIMUM * p[1]
     }
 }

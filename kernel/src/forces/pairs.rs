@@ -46,7 +46,7 @@ const CHUNKS: usize = 4;
 
 impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
-        let reach = t.iter().map(|t| kind.reach(&t.1.params)).try_fold(0.0f64, |r, t| t.map(|t| r.max(t)));
+        let reach = Some(t.iter().map(|t| kind.reach(&t.1.params)).fold(0.0f64, f64::max)).filter(|r| r.is_finite());
         let list = reach
             .filter(|_| (LIST_FROM..Pair::CLUSTERS).contains(&m.bodies.len()))
             .and_then(|r| Neighbours::new(&m.cell, r))

@@ -391,14 +391,12 @@ fn reach_within(c: &Cell, terms: &[TermInstance], at: &[Span]) -> Result<(), Dia
         return Ok(());
     }
     for (t, s) in terms.iter().zip(at).filter(|(t, _)| t.kind.spec().shape == Shape::Pairwise) {
-        match t.kind.reach(&t.params) {
-            None => {
-                return err(*s, format!("{} has unbounded reach: in a periodic box it would see only the nearest image; use a term with a cutoff", t.kind.name()))
-            }
-            Some(r) if r > half => {
-                return err(*s, format!("{} reaches {r}, more than half the periodic box ({half})", t.kind.name()))
-            }
-            _ => {}
+        let r = t.kind.reach(&t.params);
+        if r.is_infinite() {
+            return err(*s, format!("{} has unbounded reach: in a periodic box it would see only the nearest image; use a term with a cutoff", t.kind.name()));
+        }
+        if r > half {
+            return err(*s, format!("{} reaches {r}, more than half the periodic box ({half})", t.kind.name()));
         }
     }
     Ok(())
