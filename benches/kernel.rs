@@ -123,8 +123,17 @@ fn neighbour_build(c: &mut Criterion) {
     group.bench_function("checker_lj_32k", |b| {
         b.iter(|| black_box(within(black_box(&lj.x0), &lj.model.cell, reach).len()))
     });
-    // the list made ahead of a checkpoint, and the checkpoint's pairs taken from it
+    // the pairs as a checkpoint's sum takes them from the grid, in no order
     let reach = reach.expect("LJ has a cutoff");
+    group.bench_function("checker_lj_32k_unordered", |b| {
+        b.iter(|| {
+            let near = Neighbourhood::new(black_box(&lj.x0), &lj.model.cell, Some(reach), &[]);
+            let mut pairs = 0;
+            near.each_unordered(0..near.parts(), |p| pairs += p.len());
+            black_box(pairs)
+        })
+    });
+    // the list made ahead of a checkpoint, and the checkpoint's pairs taken from it
     group.bench_function("checker_lj_32k_foreseen", |b| {
         b.iter(|| black_box(Foreseen::new(black_box(&lj.x0), &lj.model.cell, reach).is_some()))
     });
