@@ -253,7 +253,7 @@ impl<'a> PairDerivative<'a> {
     }
 
     pub fn new(kind: Kind, p: &'a [f64], term: usize, wanted: (&[usize], bool, bool)) -> PairDerivative<'a> {
-        let reach2 = kind.reach(p) * kind.reach(p);
+        let reach2 = kind.reach(p).powi(2);
         PairDerivative { kind, p, term, which: pair_inputs(p.len(), wanted), reach2 }
     }
 
