@@ -10,11 +10,11 @@ use lagra_checker::monitor::Monitor;
 use lagra_checker::quantities::asked_reach;
 use lagra_checker::terms::{Kind, Shape};
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::lang::compile;
 use lagra_kernel::neighbours::Neighbours;
-use lagra_kernel::run::{run, Options};
-use lagra_kernel::scene::Scene;
 use lagra_kernel::state::State;
+use lagra_lang::scene::Scene;
+use lagra_run::compile;
+use lagra_run::run::{run, Options};
 use std::hint::black_box;
 
 /// `k³` bodies on a cubic lattice of spacing 1.1, slightly disordered, with unit masses,

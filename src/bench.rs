@@ -5,9 +5,10 @@
 //! a log-log plot (one line per integrator) and the fitted orders.
 
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::lang::compile;
-use lagra_kernel::solvers::{Integrator, Stepper};
+use lagra_kernel::solvers::Stepper;
 use lagra_kernel::state::{kinetic, State};
+use lagra_lang::integrator::Integrator;
+use lagra_run::compile;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -244,7 +245,7 @@ struct Row {
 fn measure(p: &Problem, integrator: Integrator, nominal: f64) -> Result<Row, String> {
     let scene = compile(&p.scene).map_err(|d| d.render(p.name, &p.scene).to_string())?;
     let graph = LagrangianGraph::new(&scene.model);
-    let s0 = scene.start();
+    let s0 = lagra_kernel::setup::start(&scene);
     let mut s = s0.clone();
     let steps = (p.t_end / nominal).ceil() as u64;
     let dt = p.t_end / steps as f64;
@@ -419,7 +420,8 @@ struct GradientCost {
 }
 
 fn gradient_cost(repeats: u32, quick: bool, json: bool) -> Result<String, String> {
-    use lagra_kernel::grad::{gradient, objective_value, params, Method, Objective, Request};
+    use lagra_lang::params;
+    use lagra_run::grad::{gradient, objective_value, Method, Objective, Request};
     let root = env!("CARGO_MANIFEST_DIR");
     let mut systems = vec![("lj_liquid", format!("{root}/scenes/lj_liquid.lagra"), 1000u64, "lj_shifted")];
     if !quick {
@@ -516,8 +518,8 @@ fn overhead(steps: u64, repeats: u32, json: bool) -> Result<String, String> {
         let t = Instant::now();
         let x = hand_oscillator(steps, dt);
         hand = hand.min(t.elapsed().as_secs_f64());
-        let opts = lagra_kernel::run::Options::plain(Some(steps));
-        let rep = lagra_kernel::run::run(&scene, opts)?;
+        let opts = lagra_run::run::Options::plain(Some(steps));
+        let rep = lagra_run::run::run(&scene, opts)?;
         engine = engine.min(rep.wall_s);
         agree = distance(x, rep.state.x[1]);
     }

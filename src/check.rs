@@ -1,7 +1,7 @@
 //! `lagra check CERTIFICATE [--states FILE] [--scene FILE]`.
 
 use lagra_checker::certificate::Certificate;
-use lagra_kernel::lang::compile;
+use lagra_run::compile;
 use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -38,8 +38,9 @@ pub fn main(a: Args) -> ExitCode {
 
 /// The certificate's source digest, model and claims are those of `scene`.
 fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
-    let source = std::fs::read_to_string(scene).map_err(|e| format!("cannot read {}: {e}", scene.display()))?;
-    let text = std::fs::read_to_string(cert).map_err(|e| e.to_string())?;
+    let limits = crate::reading::Limits::from_env();
+    let source = crate::reading::text(scene, limits.scene)?;
+    let text = crate::reading::text(cert, limits.certificate)?;
     let c = Certificate::read(&text)?;
     let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
     if c.source_digest != format!("sha256:{digest}") {

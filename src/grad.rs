@@ -4,9 +4,11 @@ use crate::progress::{Progress, When};
 use argmin::core::{CostFunction, Executor, Gradient as ArgminGradient, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
-use lagra_kernel::grad::{gradient, objective_value, params, Gradient, Method, Named, Objective, Request};
-use lagra_kernel::lang::compile;
-use lagra_kernel::scene::Scene;
+use lagra_lang::params;
+use lagra_lang::params::Named;
+use lagra_lang::scene::Scene;
+use lagra_run::compile;
+use lagra_run::grad::{gradient, objective_value, Gradient, Method, Objective, Request};
 use serde::ser::{Serialize, SerializeMap, Serializer};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -102,7 +104,7 @@ fn bad(msg: impl std::fmt::Display) -> ExitCode {
 /// The scene of a file, with `--set` and `--steps` applied; or the message to print.
 fn load(file: &PathBuf, set: &[String], steps: Option<u64>) -> Result<Scene, String> {
     let path = file.display().to_string();
-    let source = std::fs::read_to_string(file).map_err(|e| format!("cannot read {path}: {e}"))?;
+    let source = crate::reading::text(file, crate::reading::Limits::from_env().scene)?;
     let mut scene = compile(&source).map_err(|d| d.render(&path, &source).to_string())?;
     params::apply_settings(&mut scene, set)?;
     if let Some(n) = steps {
@@ -112,6 +114,11 @@ fn load(file: &PathBuf, set: &[String], steps: Option<u64>) -> Result<Scene, Str
         scene.solver.steps = n;
     }
     Ok(scene)
+}
+
+/// A target trace (`mse:FILE`), read within the certificate limit (`reading::Limits`).
+pub fn read_trace(file: &str) -> Result<String, String> {
+    crate::reading::text(std::path::Path::new(file), crate::reading::Limits::from_env().certificate)
 }
 
 /// The peak resident memory of this process so far (Linux's VmHWM), if it says.
@@ -145,7 +152,7 @@ struct GradReport<'a> {
     seconds: f64,
     peak_memory_bytes: Option<u64>,
     states_kept: usize,
-    growth: lagra_kernel::grad::Growth,
+    growth: lagra_run::grad::Growth,
     /// With --method check: the forward gradient and the largest relative difference.
     #[serde(skip_serializing_if = "Option::is_none")]
     forward: Option<Ordered<'a>>,
@@ -171,9 +178,10 @@ pub fn compute(
     wrt: &str,
     method: GradMethod,
     threads: usize,
+    read: &dyn Fn(&str) -> Result<String, String>,
     tell: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<(Vec<Gradient>, String), String> {
-    let objective = Objective::parse(spelling, scene)?;
+    let objective = Objective::parse_reading(spelling, scene, read)?;
     let wrt = params::parse_list(wrt, scene)?;
     if threads == 0 {
         return Err("--threads must be at least 1".into());
@@ -244,7 +252,9 @@ pub fn grad(a: GradArgs) -> ExitCode {
         Err(e) => return bad(e),
     };
     // bad spellings are bad input (2); a run that cannot be differentiated is not (1)
-    if let Err(e) = Objective::parse(&a.objective, &scene).and_then(|_| params::parse_list(&a.wrt, &scene)) {
+    if let Err(e) =
+        Objective::parse_reading(&a.objective, &scene, &read_trace).and_then(|_| params::parse_list(&a.wrt, &scene))
+    {
         return bad(e);
     }
     let passes =
@@ -255,7 +265,7 @@ pub fn grad(a: GradArgs) -> ExitCode {
         count += 1;
         progress.iter_mut().for_each(|p| p.at_in(what, count.min(passes)));
     };
-    let result = compute(&scene, &a.objective, &a.wrt, a.method, a.threads, &mut tell);
+    let result = compute(&scene, &a.objective, &a.wrt, a.method, a.threads, &read_trace, &mut tell);
     progress.iter().for_each(Progress::done);
     let (results, doc) = match result {
         Ok(r) => r,

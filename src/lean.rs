@@ -32,8 +32,7 @@ pub fn main(a: Args) -> ExitCode {
         (Some(dir), _) => std::fs::write(dir.join("Terms.lean"), terms())
             .and_then(|_| std::fs::write(dir.join("Invariance.lean"), invariance()))
             .map_err(|e| format!("cannot write into {}: {e}", dir.display())),
-        (None, Some(c)) => std::fs::read_to_string(c)
-            .map_err(|e| format!("cannot read {}: {e}", c.display()))
+        (None, Some(c)) => crate::reading::text(c, crate::reading::Limits::from_env().certificate)
             .and_then(|text| Certificate::read(&text).map_err(|e| format!("{}: {e}", c.display())))
             .and_then(|cert| obligations(&cert))
             .and_then(|lean| match &a.out {

@@ -1,6 +1,6 @@
 //! `lagra list [DIR]`: the scenes, with their domains, terms and claims.
 
-use lagra_kernel::lang::compile;
+use lagra_run::compile;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -37,10 +37,16 @@ pub fn files(dir: &Path) -> Result<Vec<PathBuf>, String> {
 
 /// Every scene of a folder, or the first one that does not compile (its located diagnostic).
 pub fn entries(dir: &Path) -> Result<Vec<Entry>, String> {
+    entries_within(dir, &|f| Ok(f.to_path_buf()))
+}
+
+/// The same, of the files `allowed` resolves (the MCP server's roots); the others are left out.
+pub fn entries_within(dir: &Path, allowed: &dyn Fn(&Path) -> Result<PathBuf, String>) -> Result<Vec<Entry>, String> {
     let mut entries = vec![];
     for f in files(dir)? {
+        let Ok(file) = allowed(&f) else { continue };
         let path = f.display().to_string();
-        let source = std::fs::read_to_string(&f).unwrap_or_default();
+        let source = crate::reading::text(&file, crate::reading::Limits::from_env().scene)?;
         let s = compile(&source).map_err(|d| d.render(&path, &source).to_string())?;
         let mut terms: Vec<&str> = vec![];
         for t in &s.model.terms {

@@ -6,9 +6,10 @@
 use lagra_checker::claims::{Claim, ClaimKind};
 use lagra_checker::model::Snapshot;
 use lagra_checker::quantities::Lifted;
-use lagra_kernel::lang::{compile, Diagnostic};
-use lagra_kernel::scene::Scene;
+use lagra_lang::scene::Scene;
+use lagra_lang::Diagnostic;
 use lagra_noether::{analyse, Analysis, Status, Symmetry, Table};
+use lagra_run::compile;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -150,10 +151,10 @@ pub fn report(source: &str, path: &str) -> Result<(serde_json::Value, String), S
 
 pub fn main(a: Args) -> ExitCode {
     let path = a.file.display().to_string();
-    let source = match std::fs::read_to_string(&a.file) {
+    let source = match crate::reading::text(&a.file, crate::reading::Limits::from_env().scene) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("lagra: cannot read {path}: {e}");
+            eprintln!("lagra: {e}");
             return ExitCode::from(2);
         }
     };

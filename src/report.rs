@@ -4,10 +4,10 @@ use lagra_checker::decision::Verdict;
 use lagra_checker::model::UnitSystem;
 use lagra_checker::monitor::Halt;
 use lagra_checker::render::{lines, sci, up};
-use lagra_kernel::observables::{Estimate, Observables};
-use lagra_kernel::run::{Measured, Report, Stop};
-use lagra_kernel::scene::Scene;
 use lagra_kernel::solvers::Iterations;
+use lagra_lang::scene::Scene;
+use lagra_run::observables::{Estimate, Observables};
+use lagra_run::run::{Measured, Report, Stop};
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -212,7 +212,7 @@ impl Summary {
 }
 
 fn thermostat(scene: &Scene) -> Option<String> {
-    use lagra_kernel::thermostat::Thermostat;
+    use lagra_lang::thermostat::Thermostat;
     let bath = scene.bath()?;
     Some(match (scene.thermostat.as_ref()?, &scene.model.thermostat) {
         (Thermostat::NoseHoover { tau }, Some(c)) => format!(

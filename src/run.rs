@@ -7,12 +7,12 @@ use lagra_checker::checksum::label;
 use lagra_checker::decision::Verdict;
 use lagra_checker::model::Snapshot;
 use lagra_checker::states::StateWriter;
-use lagra_kernel::lang::compile;
-use lagra_kernel::run::{run, Options, Report};
-use lagra_kernel::scene::Scene;
-use lagra_kernel::solvers::Integrator;
-use lagra_kernel::trace::{Format, Frames, Writer};
+use lagra_lang::integrator::Integrator;
+use lagra_lang::scene::Scene;
 use lagra_noether::Analysis;
+use lagra_run::compile;
+use lagra_run::run::{run, Options, Report};
+use lagra_run::trace::{Format, Frames, Writer};
 use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -111,7 +111,7 @@ pub struct Prepared {
 /// for a scene error.
 pub fn prepare(source: &str, path: &str, set: &[String], dt: Option<f64>) -> Result<Prepared, String> {
     let mut scene = compile(source).map_err(|d| d.render(path, source).to_string())?;
-    lagra_kernel::grad::params::apply_settings(&mut scene, set)?;
+    lagra_lang::params::apply_settings(&mut scene, set)?;
     if let Some(dt) = dt {
         if !(dt > 0.0 && dt.is_finite()) {
             return Err(format!("the time step must be positive and finite, got {dt}"));
@@ -139,9 +139,9 @@ pub fn summarize(path: &str, p: &Prepared, rep: &Report, threads: usize, explain
 
 pub fn main(a: Args) -> ExitCode {
     let path = a.file.display().to_string();
-    let source = match std::fs::read_to_string(&a.file) {
+    let source = match crate::reading::text(&a.file, crate::reading::Limits::from_env().scene) {
         Ok(s) => s,
-        Err(e) => return bad(format!("cannot read {path}: {e}")),
+        Err(e) => return bad(e),
     };
     let prepared = match prepare(&source, &path, &a.set, a.dt) {
         Ok(p) => p,

@@ -9,10 +9,11 @@ use lagra_checker::broad_phase;
 use lagra_checker::model::{Cell, Model};
 use lagra_checker::terms::{Shape, Site};
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::lang::compile;
-use lagra_kernel::solvers::{Integrator, Stepper};
+use lagra_kernel::solvers::Stepper;
 use lagra_kernel::state::State;
 use lagra_kernel::sum::Sum;
+use lagra_lang::integrator::Integrator;
+use lagra_run::compile;
 use rug::Float;
 use serde::Serialize;
 
@@ -100,7 +101,7 @@ pub struct Study {
 pub fn study(steps: u64) -> Result<Study, String> {
     let scene = compile(TEXT).map_err(|d| d.render(SCENE, TEXT).to_string())?;
     let graph = LagrangianGraph::new(&scene.model);
-    let mut s = scene.start();
+    let mut s = lagra_kernel::setup::start(&scene);
     let start = witnesses(&scene.model, &s);
     let mut stepper = Stepper::new(Integrator::VelocityVerlet, Integrator::VelocityVerlet.defaults(), &graph, &s)
         .map_err(|e| e.to_string())?;

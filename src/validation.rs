@@ -4,9 +4,9 @@
 //! their standard errors beside the published values, and each difference in combined
 //! standard errors (z), and writes the table as Markdown.
 
-use lagra_kernel::lang::compile;
-use lagra_kernel::observables::Estimate;
-use lagra_kernel::run::{run, Options};
+use lagra_run::compile;
+use lagra_run::observables::Estimate;
+use lagra_run::run::{run, Options};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

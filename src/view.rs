@@ -8,7 +8,7 @@
 use lagra_checker::certificate::Certificate;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Shape;
-use lagra_kernel::scene::Scene;
+use lagra_lang::scene::Scene;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -192,9 +192,8 @@ pub fn main(a: Args) -> ExitCode {
         None => None,
         Some(p) => {
             let path = p.display().to_string();
-            match std::fs::read_to_string(p)
-                .map_err(|e| format!("cannot read {path}: {e}"))
-                .and_then(|s| lagra_kernel::lang::compile(&s).map_err(|d| d.render(&path, &s).to_string()))
+            match crate::reading::text(p, crate::reading::Limits::from_env().scene)
+                .and_then(|s| lagra_run::compile(&s).map_err(|d| d.render(&path, &s).to_string()))
             {
                 Ok(s) => Some(s),
                 Err(e) => return bad(e),
@@ -203,7 +202,9 @@ pub fn main(a: Args) -> ExitCode {
     };
     let cert = match &a.certificate {
         None => None,
-        Some(p) => match std::fs::read_to_string(p).map_err(|e| e.to_string()).and_then(|t| Certificate::read(&t)) {
+        Some(p) => match crate::reading::text(p, crate::reading::Limits::from_env().certificate)
+            .and_then(|t| Certificate::read(&t))
+        {
             Ok(c) => Some(c),
             Err(e) => return bad(format!("{}: {e}", p.display())),
         },

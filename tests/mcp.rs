@@ -140,18 +140,68 @@ fn a_long_run_reports_progress_and_can_be_cancelled() {
     assert!(over["result"]["content"][0]["text"].as_str().unwrap().contains("over the server's budget"), "{over}");
 }
 
-/// The official MCP Python SDK, which no one here wrote, as the client.
-#[test]
-fn the_official_python_sdk_drives_it() {
+/// The Python that `setup.sh` prepares (the official MCP SDK in it), running `script`.
+fn python(script: &str, args: &[&str]) -> (bool, String) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let python =
         std::env::var("LAGRA_PYTHON").map(std::path::PathBuf::from).unwrap_or_else(|_| root.join(".venv/bin/python"));
     assert!(python.exists(), "{} is missing: run `bash setup.sh` (it makes .venv with the MCP SDK)", python.display());
-    let o = Command::new(&python)
-        .args(["tests/mcp_client.py", env!("CARGO_BIN_EXE_lagra")])
-        .current_dir(root)
-        .output()
-        .unwrap();
+    let o = Command::new(&python).arg(script).args(args).current_dir(root).output().unwrap();
     let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    assert!(o.status.success() && out.contains("mcp_client: ok"), "{out}\n{err}");
+    (o.status.success(), format!("{out}\n{err}"))
+}
+
+/// The official MCP Python SDK, which no one here wrote, as the client.
+#[test]
+fn the_official_python_sdk_drives_it() {
+    let (ok, out) = python("tests/mcp_client.py", &[env!("CARGO_BIN_EXE_lagra")]);
+    assert!(ok && out.contains("mcp_client: ok"), "{out}");
+}
+
+/// The same SDK asks for what lies outside the server's roots, and for inputs that are no
+/// regular file or too large: each is refused, nothing echoed, and the server answers after.
+#[test]
+fn the_server_reads_only_under_its_roots_and_within_bounds() {
+    let work = tempfile::tempdir().unwrap();
+    let (ok, out) = python("tests/mcp_confined.py", &[env!("CARGO_BIN_EXE_lagra"), work.path().to_str().unwrap()]);
+    assert!(ok && out.contains("mcp_confined: ok"), "{out}");
+}
+
+/// A client that offers roots is asked for them after the handshake; its answer narrows what
+/// the server reads, and a change is asked about again.
+#[test]
+fn the_client_roots_narrow_the_server_roots() {
+    let mut s = Server::start(&[]);
+    s.request(1, "initialize", json!({ "protocolVersion": "2025-11-25", "capabilities": { "roots": { "listChanged": true } }, "clientInfo": { "name": "t", "version": "0" } }));
+    s.answer(1);
+    s.send(r#"{"jsonrpc":"2.0","method":"notifications/initialized"}"#);
+    let asked = s.lines.recv_timeout(Duration::from_secs(60)).unwrap();
+    assert_eq!((asked["method"].as_str(), asked["id"].as_str()), (Some("roots/list"), Some("lagra-roots")), "{asked}");
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let roots = |dir: &Path| json!({ "jsonrpc": "2.0", "id": "lagra-roots", "result": { "roots": [{ "uri": format!("file://{}", dir.display()) }] } });
+    s.send(&roots(&here.join("scenes")).to_string());
+    let check = |s: &mut Server, id: u64, path: &str| {
+        s.request(id, "tools/call", json!({ "name": "check_scene", "arguments": { "path": path } }));
+        s.answer(id).0["result"].clone()
+    };
+    assert_eq!(check(&mut s, 2, "scenes/oscillator.lagra")["isError"], json!(false));
+    let outside = check(&mut s, 3, "tests/scenes_in_tests_are_outside.lagra");
+    assert!(outside["content"][0]["text"].as_str().unwrap().contains("narrowed by the client"), "{outside}");
+    s.send(r#"{"jsonrpc":"2.0","method":"notifications/roots/list_changed"}"#);
+    let again = s.lines.recv_timeout(Duration::from_secs(60)).unwrap();
+    assert_eq!(again["method"], json!("roots/list"));
+    s.send(&roots(&here.join("no-such-folder")).to_string());
+    assert_eq!(check(&mut s, 4, "scenes/oscillator.lagra")["isError"], json!(true));
+}
+
+/// A message longer than any inline scene could make is refused unread, and the next one is
+/// answered as usual.
+#[test]
+fn an_overlong_message_is_refused_unread() {
+    let mut s = Server::start(&[]);
+    s.send(&"x".repeat(34 << 20));
+    let refused = s.lines.recv_timeout(Duration::from_secs(60)).unwrap();
+    assert!(refused["error"]["message"].as_str().unwrap().contains("not read"), "{refused}");
+    s.request(1, "ping", json!({}));
+    assert_eq!(s.answer(1).0["result"], json!({}));
 }

@@ -14,15 +14,7 @@ import sys
 
 from mcp import StdioServerParameters
 from mcp.client.client import Client
-
-
-def check(cond, what):
-    if not cond:
-        raise SystemExit(f"mcp_client: FAILED: {what}")
-
-
-def text_of(result):
-    return "".join(c.text for c in result.content if getattr(c, "type", "") == "text")
+from mcp_common import check, text_of
 
 
 def period(report):

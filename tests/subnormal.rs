@@ -10,8 +10,8 @@
 #![cfg(target_arch = "x86_64")]
 
 use lagra_checker::monitor::Monitor;
-use lagra_kernel::lang::compile;
-use lagra_kernel::run::{run, Options};
+use lagra_run::compile;
+use lagra_run::run::{run, Options};
 use std::arch::asm;
 use std::path::PathBuf;
 
@@ -62,7 +62,7 @@ fn the_checker_raises_no_underflow_and_meets_no_subnormal_on_any_scene() {
         if s.claims.is_empty() || s.x0.len() > 40_000 {
             continue;
         }
-        let first = s.start();
+        let first = lagra_kernel::setup::start(&s);
         let later = run(&s, Options::plain(Some(20))).expect("20 steps").state;
         let mut m = Monitor::new(s.model.clone(), s.claims.clone(), 20).expect("a valid model");
         m.set_threads(1);

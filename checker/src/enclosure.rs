@@ -4,9 +4,9 @@
 //! deciding what binary64 intervals cannot).
 
 use crate::mpfi::Mpfi;
-use crate::quantities::PairSum;
+use crate::real::Real;
 
-pub trait Enclosure: PairSum {
+pub trait Enclosure: Real {
     fn abs(self) -> Self;
     fn max(self, o: Self) -> Self;
     /// `(lo, hi)` with lo ≤ every enclosed value ≤ hi; `(NaN, NaN)` when nothing is enclosed.

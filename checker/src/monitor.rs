@@ -11,7 +11,7 @@ use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
 use crate::outward::Outward;
-use crate::quantities::{foresee, pair_reaches, Lifted};
+use crate::quantities::{foresee, pair_reaches, Lifted, PairSum};
 use crate::states::State;
 use crate::terms::{Kind, Site};
 use std::sync::Arc;
@@ -92,7 +92,7 @@ pub struct Outcome {
 }
 
 /// The quantity a dynamic claim is about.
-fn measure<E: Enclosure>(c: &Claim, q: &Lifted<E>, model: &Model, s: &Snapshot) -> Vec<E> {
+fn measure<E: Enclosure + PairSum>(c: &Claim, q: &Lifted<E>, model: &Model, s: &Snapshot) -> Vec<E> {
     let axes = |v: [E; 3]| -> Vec<E> {
         let keep = c.axes.unwrap_or([true; 3]);
         v.into_iter().zip(keep).filter(|p| p.1).map(|p| p.0).collect()

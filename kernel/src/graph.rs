@@ -279,7 +279,7 @@ impl LagrangianGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lang::compile;
+    use crate::setup::compile;
 
     /// 5,324 Lennard-Jones atoms (enough to split the pair list into chunks), a few steps into a
     /// melt so that the list is stale and images cross the box.
@@ -291,7 +291,7 @@ mod tests {
                solver { dt: 0.005, steps: 1 } }",
         )
         .unwrap();
-        let mut s = scene.start();
+        let mut s = crate::setup::start(&scene);
         s.x.iter_mut().zip(&s.v).for_each(|(x, v)| (0..3).for_each(|c| x[c] += 0.02 * v[c] - 40.0));
         (scene.model, s)
     }

@@ -1,27 +1,21 @@
-//! `lagra-kernel`: the `.lagra` language, the Lagrangian graph, fast forces, solvers and the
-//! run loop. Nothing here is trusted: the checker re-evaluates every claim on the exact states
-//! this crate produces.
+//! `lagra-kernel`: what steps a state. A compiled scene (`lagra_lang::Scene`) becomes the
+//! Lagrangian graph; fast forces (bonded, pairwise over neighbour lists, fields), constraints,
+//! contact and rigid bodies, thermostats, and the solvers that advance a state, each mapped from
+//! the name the scene gives. Nothing here is trusted: the checker re-evaluates every claim on
+//! the exact states this crate produces.
 
-pub mod checking;
 pub mod constraints;
 pub mod contact;
 pub mod derivatives;
 pub mod forces;
-pub mod grad;
 pub mod graph;
-pub mod lang;
+pub mod lanes;
 pub mod neighbours;
-pub mod observables;
-pub mod predict;
-pub mod random;
 pub mod rigid;
-pub mod run;
-pub mod scene;
+pub mod setup;
 pub mod solvers;
 pub mod state;
 pub mod step;
 pub mod sum;
-pub mod tail;
 pub mod thermostat;
-pub mod trace;
 pub mod traverse;

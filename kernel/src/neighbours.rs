@@ -13,7 +13,7 @@
 //! together moved more than the skin: until then no unlisted pair can have come within reach.
 //! Everything here depends on the positions alone, never on the number of threads.
 
-use crate::forces::lanes::{norm2, F64x4, Lane};
+use crate::lanes::{norm2, F64x4, Lane};
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;

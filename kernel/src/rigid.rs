@@ -1,6 +1,6 @@
 //! Rigid bodies in SE(3): a body's pose (centre of mass and orientation, a unit quaternion from
-//! the body frame to the world), its principal moments from its shape and mass, and the free
-//! rigid body's symplectic step.
+//! the body frame to the world) and the free rigid body's symplectic step. Its shape, principal
+//! moments and initial spin are the scene's (`lagra_lang::shape`).
 //!
 //! The body frame is the principal frame (a box's edges, any frame for a sphere), so the inertia
 //! is the diagonal `moments` and the body-frame angular momentum π gives ω = π / I per axis. No
@@ -8,50 +8,8 @@
 //! body's rotation is free and commutes with everything else a step does: the stepper turns the
 //! rigid bodies after the translational step (`LagrangianGraph::turn`).
 
+pub use lagra_lang::shape::Spin;
 use nalgebra::{UnitQuaternion, Vector3};
-
-/// What a rigid body is shaped as; its mass is uniform.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Shape {
-    /// Edge lengths a, b, c along the body axes.
-    Cuboid([f64; 3]),
-    Sphere(f64),
-}
-
-impl Shape {
-    /// The principal moments about the centre of mass: m(b² + c²)/12 and its turns for a box,
-    /// 2mr²/5 for a sphere. A size or mass that is not positive and finite is an error.
-    pub fn moments(&self, mass: f64) -> Result<Vector3<f64>, String> {
-        let positive = |what: &str, v: f64| {
-            if v > 0.0 && v.is_finite() {
-                Ok(v)
-            } else {
-                Err(format!("{what} must be positive and finite, not {v}"))
-            }
-        };
-        let m = positive("a rigid body's mass", mass)?;
-        Ok(match *self {
-            Shape::Cuboid(size) => {
-                let [a, b, c] = [0, 1, 2].map(|k| positive("a box's edge length", size[k]));
-                let [a, b, c] = [a?, b?, c?];
-                Vector3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (m / 12.0)
-            }
-            Shape::Sphere(r) => Vector3::repeat(0.4 * m * positive("a sphere's radius", r)?.powi(2)),
-        })
-    }
-}
-
-/// A rigid body's spin as a state holds it (`State::spin`): its orientation, a unit quaternion
-/// (w, x, y, z) from the body frame to the world's, then its angular momentum π = I ω in the
-/// body frame.
-pub type Spin = [f64; 7];
-
-/// The spin of a body at orientation `q` turning at `omega` (world frame).
-pub fn spin_of(q: UnitQuaternion<f64>, omega: Vector3<f64>, moments: Vector3<f64>) -> Spin {
-    let pi = (q.inverse() * omega).component_mul(&moments);
-    let w = q.quaternion();
-    [w.w, w.i, w.j, w.k, pi[0], pi[1], pi[2]]
-}
 
 fn orientation(s: &Spin) -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(s[0], s[1], s[2], s[3]))
@@ -100,6 +58,7 @@ pub fn free_step(s: &mut Spin, moments: Vector3<f64>, h: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lagra_lang::shape::spin_of;
     use proptest::prelude::*;
 
     /// The period of the body-frame angular momentum of a torque-free body (Landau and Lifshitz,
@@ -133,20 +92,6 @@ mod tests {
     fn spinning(pi: [f64; 3]) -> Spin {
         let q = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.3).into_inner();
         [q.w, q.i, q.j, q.k, pi[0], pi[1], pi[2]]
-    }
-
-    #[test]
-    fn a_box_and_a_sphere_have_their_moments() {
-        let m = Shape::Cuboid([1.0, 2.0, 3.0]).moments(12.0).unwrap();
-        assert_eq!(m, Vector3::new(13.0, 10.0, 5.0));
-        assert_eq!(Shape::Sphere(0.5).moments(10.0).unwrap(), Vector3::repeat(1.0));
-    }
-
-    #[test]
-    fn sizes_and_masses_must_be_positive() {
-        assert!(Shape::Cuboid([1.0, 0.0, 1.0]).moments(1.0).unwrap_err().contains("edge length"));
-        assert!(Shape::Sphere(-1.0).moments(1.0).unwrap_err().contains("radius"));
-        assert!(Shape::Sphere(1.0).moments(f64::NAN).unwrap_err().contains("mass"));
     }
 
     #[test]

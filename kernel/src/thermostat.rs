@@ -1,68 +1,12 @@
-//! Thermostats: what holds a scene at a temperature. A Nosé–Hoover chain is more Lagrangian —
-//! links with their own kinetic and potential energy, in the model where the checker sees them
-//! (`lagra_checker::thermostat::Chain`) — and its half-step propagation is here. A Langevin bath
+//! Thermostats: what holds a scene at a temperature (declared in `lagra_lang::thermostat`). A
+//! Nosé–Hoover chain is more Lagrangian — links with their own kinetic and potential energy, in
+//! the model where the checker sees them (`lagra_checker::thermostat::Chain`) — and its
+//! half-step propagation is here. A Langevin bath
 //! is friction and noise; its noise is drawn per (seed, step, body, axis) by a counter-based
 //! generator, so a run is the same bits for a seed on any number of threads.
 
 use crate::state::State;
-use lagra_checker::model::Model;
-use lagra_checker::terms::Shape;
 use lagra_checker::thermostat::Chain;
-
-/// The thermostat a scene declares.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Thermostat {
-    /// A Nosé–Hoover chain relaxing over `tau`; the chain itself (kT, the degrees of freedom,
-    /// the links' masses) is the model's (`Model::thermostat`).
-    NoseHoover { tau: f64 },
-    /// Langevin dynamics at k_B·T = `kt` with friction `gamma` (per time), noise from `seed`.
-    Langevin { kt: f64, gamma: f64, seed: u64 },
-}
-
-impl Thermostat {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Thermostat::NoseHoover { .. } => "nose_hoover",
-            Thermostat::Langevin { .. } => "langevin",
-        }
-    }
-}
-
-/// The temperature a thermostat holds, over the degrees of freedom it thermalizes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bath {
-    pub kt: f64,
-    pub dof: f64,
-}
-
-impl Bath {
-    pub fn of(t: &Thermostat, model: &Model) -> Bath {
-        match (t, &model.thermostat) {
-            (Thermostat::NoseHoover { .. }, Some(c)) => Bath { kt: c.kt, dof: c.dof },
-            (Thermostat::Langevin { kt, .. }, _) => Bath { kt: *kt, dof: 3.0 * model.bodies.len() as f64 },
-            (Thermostat::NoseHoover { .. }, None) => unreachable!("a Nosé–Hoover scene's model holds its chain"),
-        }
-    }
-}
-
-/// The kinetic degrees of freedom a chain thermalizes: 3N, less the three of the centre of mass
-/// when every term is internal (bonds and pairs: the total momentum is then conserved, and the
-/// chain, which scales every velocity alike, keeps it at zero).
-pub fn degrees_of_freedom(model: &Model) -> f64 {
-    let n = 3.0 * model.bodies.len() as f64;
-    let internal = model.terms.iter().all(|t| t.kind.spec().shape != Shape::External);
-    if internal {
-        n - 3.0
-    } else {
-        n
-    }
-}
-
-/// A chain of `links` for `tau`: Q₁ = N_f·kT·τ², Q_j = kT·τ² (Martyna, Tuckerman & Klein 1996).
-pub fn chain(kt: f64, tau: f64, links: usize, dof: f64) -> Chain {
-    let q = kt * tau * tau;
-    Chain { kt, dof, masses: (0..links).map(|j| if j == 0 { dof * q } else { q }).collect() }
-}
 
 /// Suzuki–Yoshida fourth-order weights: three sub-steps per chain half-step.
 const WEIGHTS: [f64; 3] = [1.351_207_191_959_657_8, -1.702_414_383_919_315_3, 1.351_207_191_959_657_8];
@@ -110,7 +54,8 @@ pub fn nose_hoover_half(chain: &Chain, s: &mut State, masses: &[f64], h: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lagra_checker::model::{Body, UnitSystem};
+    use lagra_checker::model::{Body, Model, UnitSystem};
+    use lagra_lang::thermostat::chain;
 
     fn gas(n: usize) -> (Model, State) {
         let model = Model {
@@ -122,7 +67,9 @@ mod tests {
             thermostat: Some(chain(0.8, 0.5, 3, 3.0 * n as f64 - 3.0)),
             floor: None,
         };
-        let v = (0..n as u64).map(|i| std::array::from_fn(|c| crate::random::normal(1, 0, 3 * i + c as u64))).collect();
+        let v = (0..n as u64)
+            .map(|i| std::array::from_fn(|c| lagra_lang::random::normal(1, 0, 3 * i + c as u64)))
+            .collect();
         (model, State { step: 0, t: 0.0, x: vec![[0.0; 3]; n], v, chain: vec![[0.0; 2]; 3], spin: vec![] })
     }
 

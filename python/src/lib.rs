@@ -7,10 +7,10 @@
 use lagra::grad::{compute, GradMethod};
 use lagra::run::{prepare, summarize, Prepared};
 use lagra_checker::model::Cell;
-use lagra_kernel::grad::params::apply_settings;
-use lagra_kernel::run::{run, Options, Watch};
 use lagra_kernel::state::State;
-use lagra_kernel::trace::{Format, Recorded, Writer};
+use lagra_lang::params::apply_settings;
+use lagra_run::run::{run, Options, Watch};
+use lagra_run::trace::{Format, Recorded, Writer};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
@@ -80,10 +80,10 @@ impl PyScene {
     #[staticmethod]
     fn from_file(path: PathBuf) -> PyResult<Self> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(format!("{shown}: no such file")),
-            _ => PyOSError::new_err(format!("cannot read {shown}: {e}")),
-        })?;
+        if !path.exists() {
+            return Err(PyFileNotFoundError::new_err(format!("{shown}: no such file")));
+        }
+        let text = lagra::reading::text(&path, lagra::reading::Limits::from_env().scene).map_err(PyOSError::new_err)?;
         Self::from_str(&text, &shown)
     }
 
@@ -300,9 +300,11 @@ impl PyScene {
     fn _gradient(&self, py: Python<'_>, objective: &str, wrt: Vec<String>, threads: usize) -> PyResult<String> {
         let scene = &self.prepared.scene;
         let wrt = wrt.join(",");
-        py.detach(|| compute(scene, objective, &wrt, GradMethod::Reverse, threads, &mut |_, _, _| {}))
-            .map(|(_, json)| json)
-            .map_err(scene_error)
+        py.detach(|| {
+            compute(scene, objective, &wrt, GradMethod::Reverse, threads, &lagra::grad::read_trace, &mut |_, _, _| {})
+        })
+        .map(|(_, json)| json)
+        .map_err(scene_error)
     }
 
     fn __repr__(&self) -> String {

@@ -15,12 +15,21 @@
 //! about two hundred lines, tested end to end by the official Python SDK (`tests/mcp_client.py`).
 //! Bad input never stops the server: malformed JSON is a parse error, an unknown method or
 //! tool a protocol error, a failing tool a result with `isError`.
+//!
+//! The server reads only under its roots (`--root`, the folder it was started in by default,
+//! and the folder of scenes it offers),
+//! narrowed to the client's where the client offers them (`roots/list`, asked after the
+//! handshake and again when the client says they changed); every path is resolved, symlinks
+//! included, before it is checked. Every input is bounded: files (regular files only, within
+//! `reading::Limits`), inline scenes, `set` lists, a message's line, a run's atom-steps. It writes
+//! no file.
 
 mod tools;
 
+use crate::reading::{Limits, Roots};
 use serde_json::{json, Value};
 use std::collections::HashMap;
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -43,6 +52,17 @@ pub struct Args {
     /// tool error that says so.
     #[arg(long, value_name = "ATOM_STEPS", default_value_t = 2e9)]
     budget: f64,
+    /// A folder the server may read under (repeatable; default: the folder it was started in;
+    /// the scenes' folder is one too). Paths outside every root are refused, symlinks resolved
+    /// first. File sizes are bounded by LAGRA_MAX_SCENE_BYTES (16 MiB),
+    /// LAGRA_MAX_CERTIFICATE_BYTES (1 GiB) and LAGRA_MAX_STATES_BYTES (16 GiB).
+    #[arg(long = "root", value_name = "DIR")]
+    roots: Vec<PathBuf>,
+}
+
+/// The longest line (one JSON-RPC message) read: an inline scene at its limit, escaped.
+fn longest_message(limits: &Limits) -> u64 {
+    limits.scene.saturating_mul(2).saturating_add(1 << 20)
 }
 
 /// What every call's thread shares: the output, the calls in flight, the settings.
@@ -51,6 +71,10 @@ pub struct Server {
     running: Mutex<HashMap<String, Arc<AtomicBool>>>,
     pub scenes: PathBuf,
     pub budget: f64,
+    pub roots: Mutex<Roots>,
+    pub limits: Limits,
+    /// Whether the client offers its roots (asked for after the handshake).
+    client_roots: AtomicBool,
 }
 
 impl Server {
@@ -77,18 +101,82 @@ impl Server {
         }
         self.send(&json!({ "jsonrpc": "2.0", "method": "notifications/progress", "params": params }));
     }
+
+    /// `path` resolved under the roots.
+    pub fn resolve(&self, path: &str) -> Result<PathBuf, String> {
+        self.roots.lock().unwrap_or_else(|p| p.into_inner()).resolve(path)
+    }
+
+    /// Asks the client for its roots; its answer narrows the server's (`answered`).
+    fn ask_roots(&self) {
+        if self.client_roots.load(Ordering::Relaxed) {
+            self.send(&json!({ "jsonrpc": "2.0", "id": ROOTS_REQUEST, "method": "roots/list" }));
+        }
+    }
+
+    /// A response from the client: the roots it was asked for.
+    fn answered(&self, id: &Value, message: &Value) {
+        if id != &json!(ROOTS_REQUEST) {
+            return;
+        }
+        let roots = message.pointer("/result/roots").and_then(Value::as_array);
+        let uris: Vec<String> = roots
+            .into_iter()
+            .flatten()
+            .filter_map(|r| r.get("uri").and_then(Value::as_str).map(String::from))
+            .collect();
+        // an error or a malformed answer narrows to nothing: the client meant to say something
+        self.roots.lock().unwrap_or_else(|p| p.into_inner()).narrow(&uris);
+    }
 }
 
+/// The id of the server's one request, `roots/list`.
+const ROOTS_REQUEST: &str = "lagra-roots";
+
 pub fn main(a: Args) -> ExitCode {
+    // the folder of scenes it offers is a root too, where it exists
+    let mut dirs = if a.roots.is_empty() { vec![PathBuf::from(".")] } else { a.roots.clone() };
+    dirs.extend(Some(a.scenes.clone()).filter(|s| s.is_dir()));
+    let roots = match Roots::new(&dirs) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("lagra mcp: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let limits = Limits::from_env();
     let server = Arc::new(Server {
         out: Mutex::new(std::io::stdout()),
         running: Mutex::new(HashMap::new()),
         scenes: a.scenes,
         budget: a.budget,
+        roots: Mutex::new(roots),
+        limits,
+        client_roots: AtomicBool::new(false),
     });
     let mut calls = vec![];
-    for line in std::io::stdin().lock().lines() {
-        let Ok(line) = line else { break };
+    let mut input = std::io::stdin().lock();
+    let longest = longest_message(&limits);
+    loop {
+        let mut bytes = vec![];
+        match (&mut input).take(longest + 1).read_until(b'\n', &mut bytes) {
+            Ok(0) | Err(_) => break,
+            Ok(_) => {}
+        }
+        if bytes.len() as u64 > longest {
+            let mut rest = bytes.split_off(bytes.len() - 1);
+            // the rest of the line is dropped unread into memory, a chunk at a time
+            while !rest.ends_with(b"\n") {
+                rest.clear();
+                match (&mut input).take(1 << 20).read_until(b'\n', &mut rest) {
+                    Ok(0) | Err(_) => break,
+                    Ok(_) => {}
+                }
+            }
+            server.error(&Value::Null, PARSE_ERROR, format!("a message longer than {longest} bytes: not read"));
+            continue;
+        }
+        let line = String::from_utf8_lossy(&bytes);
         if line.trim().is_empty() {
             continue;
         }
@@ -118,7 +206,10 @@ fn handle(server: &Arc<Server>, line: &str) -> Option<std::thread::JoinHandle<()
     let method = message.get("method").and_then(Value::as_str);
     let (Some(method), true) = (method, message.get("jsonrpc") == Some(&json!("2.0"))) else {
         // a response from the client (we send no requests) is dropped; anything else is invalid
-        if id.is_some() && message.get("result").is_none() && message.get("error").is_none() {
+        let response = message.get("result").is_some() || message.get("error").is_some();
+        if let (Some(id), true) = (&id, response) {
+            server.answered(id, &message);
+        } else if id.is_some() && !response {
             server.error(
                 id.as_ref().unwrap_or(&Value::Null),
                 INVALID_REQUEST,
@@ -132,11 +223,15 @@ fn handle(server: &Arc<Server>, line: &str) -> Option<std::thread::JoinHandle<()
     let params = message.get("params").cloned().unwrap_or(json!({}));
     let Some(id) = id else {
         // a notification: cancellation is the one that asks for something
-        if method == "notifications/cancelled" {
-            let key = params.get("requestId").map(|r| r.to_string()).unwrap_or_default();
-            if let Some(flag) = server.running.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
-                flag.store(true, Ordering::Relaxed);
+        match method {
+            "notifications/cancelled" => {
+                let key = params.get("requestId").map(|r| r.to_string()).unwrap_or_default();
+                if let Some(flag) = server.running.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+                    flag.store(true, Ordering::Relaxed);
+                }
             }
+            "notifications/initialized" | "notifications/roots/list_changed" => server.ask_roots(),
+            _ => {}
         }
         return None;
     };
@@ -144,6 +239,8 @@ fn handle(server: &Arc<Server>, line: &str) -> Option<std::thread::JoinHandle<()
         "initialize" => {
             let asked = params.get("protocolVersion").and_then(Value::as_str).unwrap_or(VERSIONS[0]);
             let version = VERSIONS.iter().find(|v| **v == asked).copied().unwrap_or(VERSIONS[0]);
+            let offers_roots = params.pointer("/capabilities/roots").is_some_and(|r| !r.is_null());
+            server.client_roots.store(offers_roots, Ordering::Relaxed);
             server.reply(
                 &id,
                 json!({
@@ -161,7 +258,7 @@ fn handle(server: &Arc<Server>, line: &str) -> Option<std::thread::JoinHandle<()
             Err(e) => server.error(&id, INVALID_PARAMS, e),
         },
         "resources/read" => {
-            match tools::read_resource(&server.scenes, params.get("uri").and_then(Value::as_str).unwrap_or("")) {
+            match tools::read_resource(server, params.get("uri").and_then(Value::as_str).unwrap_or("")) {
                 Ok(r) => server.reply(&id, r),
                 Err(e) => server.error(&id, INVALID_PARAMS, e),
             }

@@ -8,7 +8,16 @@ use std::sync::atomic::AtomicBool;
 
 fn server(budget: f64) -> Server {
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    Server { out: std::io::stdout().into(), running: Default::default(), scenes, budget }
+    let roots = crate::reading::Roots::new(&[std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))]).unwrap();
+    Server {
+        out: std::io::stdout().into(),
+        running: Default::default(),
+        scenes,
+        budget,
+        roots: roots.into(),
+        limits: Default::default(),
+        client_roots: Default::default(),
+    }
 }
 
 fn text(v: &Value) -> &str {

@@ -5,9 +5,9 @@
 //! tool error: it is the answer, in the report (`passed`, `claims`).
 
 use super::Server;
-use crate::{grad, list, noether, report, run, terms};
-use lagra_kernel::lang::compile;
-use lagra_kernel::run::Options;
+use crate::{grad, list, noether, reading, report, run, terms};
+use lagra_run::compile;
+use lagra_run::run::Options;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -90,22 +90,31 @@ fn failed(e: impl std::fmt::Display) -> Value {
     answer(e.to_string(), None, true)
 }
 
-/// The scene a call names: its text under `scene`, or a file under `path`.
-fn source(args: &Value) -> Result<(String, String), String> {
+/// The scene a call names: its text under `scene`, or a file under `path` (under the roots).
+fn source(server: &Server, args: &Value) -> Result<(String, String), String> {
     match (args.get("scene").and_then(Value::as_str), args.get("path").and_then(Value::as_str)) {
-        (Some(text), None) => Ok((text.to_string(), "scene.lagra".to_string())),
+        (Some(text), None) => {
+            Ok((reading::inline("scene", text, server.limits.scene)?.to_string(), "scene.lagra".into()))
+        }
         (None, Some(path)) => {
-            std::fs::read_to_string(path).map(|t| (t, path.to_string())).map_err(|e| format!("cannot read {path}: {e}"))
+            let file = server.resolve(path)?;
+            reading::text(&file, server.limits.scene).map(|t| (t, path.to_string()))
         }
         (Some(_), Some(_)) => Err("give the scene's text under `scene` or a file under `path`, not both".into()),
         (None, None) => Err("give the scene's text under `scene` (or a file under `path`)".into()),
     }
 }
 
+/// The most parameters one call may set (a scene has a handful; each is looked up by name).
+const MOST_SET: usize = 1000;
+
 /// `set: {"name": value}` as `NAME=VALUE` settings.
 fn settings(args: &Value) -> Result<Vec<String>, String> {
     match args.get("set") {
         None | Some(Value::Null) => Ok(vec![]),
+        Some(Value::Object(m)) if m.len() > MOST_SET => {
+            Err(format!("`set` names {} parameters, more than the {MOST_SET} a call may set", m.len()))
+        }
         Some(Value::Object(m)) => m
             .iter()
             .map(|(k, v)| {
@@ -129,14 +138,15 @@ fn positive_integer(args: &Value, name: &str) -> Result<Option<u64>, String> {
 
 pub fn call(server: &Server, name: &str, args: &Value, token: Option<&Value>, cancel: &AtomicBool) -> Value {
     let result = match name {
-        "list_scenes" => list::entries(&server.scenes).map(|e| {
-            let doc = json!({ "scenes": e });
-            answer(serde_json::to_string_pretty(&doc).unwrap_or_default(), Some(doc), false)
-        }),
-        "read_scene" => read_scene(&server.scenes, args.get("name").and_then(Value::as_str).unwrap_or(""))
+        "list_scenes" => list::entries_within(&server.scenes, &|f: &Path| server.resolve(&f.display().to_string()))
+            .map(|e| {
+                let doc = json!({ "scenes": e });
+                answer(serde_json::to_string_pretty(&doc).unwrap_or_default(), Some(doc), false)
+            }),
+        "read_scene" => read_scene(server, args.get("name").and_then(Value::as_str).unwrap_or(""))
             .map(|(_, t)| answer(t, None, false)),
         "terms" => Ok(answer(terms::table(), None, false)),
-        "check_scene" => source(args).map(|(text, path)| match compile(&text) {
+        "check_scene" => source(server, args).map(|(text, path)| match compile(&text) {
             Ok(s) => answer(
                 format!(
                     "{} compiles: {} bodies, {} terms, {} claims, integrator {}",
@@ -152,11 +162,11 @@ pub fn call(server: &Server, name: &str, args: &Value, token: Option<&Value>, ca
             Err(d) => answer(d.render(&path, &text).to_string(), None, true),
         }),
         "run_scene" => run_scene(server, args, token, cancel),
-        "noether" => source(args).map(|(text, path)| match noether::report(&text, &path) {
+        "noether" => source(server, args).map(|(text, path)| match noether::report(&text, &path) {
             Ok((doc, text)) => answer(text, Some(doc), false),
             Err(e) => answer(e, None, true),
         }),
-        "recheck_certificate" => recheck(args),
+        "recheck_certificate" => recheck(server, args),
         "gradient" => gradient(server, args, token),
         _ => Err(format!("unknown tool `{name}`")),
     };
@@ -164,21 +174,20 @@ pub fn call(server: &Server, name: &str, args: &Value, token: Option<&Value>, ca
 }
 
 /// One of the offered scenes by name: its path and text.
-fn read_scene(dir: &Path, name: &str) -> Result<(String, String), String> {
-    let files = list::files(dir)?;
+fn read_scene(server: &Server, name: &str) -> Result<(String, String), String> {
+    let files = list::files(&server.scenes)?;
     let wanted = name.trim_end_matches(".lagra");
     let f = files.iter().find(|f| f.file_stem().is_some_and(|s| s == wanted)).ok_or_else(|| {
         let known: Vec<String> =
             files.iter().filter_map(|f| f.file_stem().map(|s| s.to_string_lossy().into_owned())).collect();
         format!("no scene `{name}`; scenes: {}", known.join(", "))
     })?;
-    std::fs::read_to_string(f)
-        .map(|t| (f.display().to_string(), t))
-        .map_err(|e| format!("cannot read {}: {e}", f.display()))
+    let file = server.resolve(&f.display().to_string())?;
+    reading::text(&file, server.limits.scene).map(|t| (f.display().to_string(), t))
 }
 
 fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &AtomicBool) -> Result<Value, String> {
-    let (text, path) = source(args)?;
+    let (text, path) = source(server, args)?;
     let dt = args.get("dt").and_then(Value::as_f64);
     let prepared = match run::prepare(&text, &path, &settings(args)?, dt) {
         Ok(p) => p,
@@ -214,24 +223,29 @@ fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &Atom
         stop: Some(cancel),
         watch: None,
     };
-    let rep = lagra_kernel::run::run(scene, opts)?;
+    let rep = lagra_run::run::run(scene, opts)?;
     let summary: report::Summary = run::summarize(&path, &prepared, &rep, threads, false);
     let doc = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
     Ok(answer(serde_json::to_string_pretty(&doc).unwrap_or_default(), Some(doc), false))
 }
 
-fn recheck(args: &Value) -> Result<Value, String> {
+fn recheck(server: &Server, args: &Value) -> Result<Value, String> {
     let cert =
         args.get("certificate").and_then(Value::as_str).ok_or("give the certificate's file under `certificate`")?;
-    let states = args.get("states").and_then(Value::as_str).map(Path::new);
-    let r = lagra_checker::cli::check(Path::new(cert), states);
+    // under the roots, regular and within the limits, before the checker opens them
+    let cert = server.resolve(cert).and_then(|p| reading::regular(&p, server.limits.certificate).map(|_| p))?;
+    let states = match args.get("states").and_then(Value::as_str) {
+        None => None,
+        Some(s) => Some(server.resolve(s).and_then(|p| reading::regular(&p, server.limits.states).map(|_| p))?),
+    };
+    let r = lagra_checker::cli::check(&cert, states.as_deref());
     let text = format!("{}{}", r.stdout, r.stderr);
     // 2: a file missing or malformed; 0 and 1 are the re-check's answer
     Ok(answer(text, Some(json!({ "exit_code": r.code, "agrees_and_passes": r.code == 0 })), r.code == 2))
 }
 
 fn gradient(server: &Server, args: &Value, token: Option<&Value>) -> Result<Value, String> {
-    let (text, path) = source(args)?;
+    let (text, path) = source(server, args)?;
     let prepared = match run::prepare(&text, &path, &settings(args)?, None) {
         Ok(p) => p,
         Err(e) => return Ok(answer(e, None, true)),
@@ -268,7 +282,8 @@ fn gradient(server: &Server, args: &Value, token: Option<&Value>) -> Result<Valu
             last = Some(std::time::Instant::now());
         }
     };
-    let (_, text) = grad::compute(&scene, objective, wrt, method, 1, &mut tell)?;
+    let read = |file: &str| server.resolve(file).and_then(|p| reading::text(&p, server.limits.certificate));
+    let (_, text) = grad::compute(&scene, objective, wrt, method, 1, &read, &mut tell)?;
     let doc = serde_json::from_str(&text).map_err(|e| e.to_string())?;
     Ok(answer(text, Some(doc), false))
 }
@@ -282,10 +297,10 @@ pub fn resources(dir: &Path) -> Result<Vec<Value>, String> {
         .collect())
 }
 
-pub fn read_resource(dir: &Path, uri: &str) -> Result<Value, String> {
+pub fn read_resource(server: &Server, uri: &str) -> Result<Value, String> {
     let name = uri
         .strip_prefix("lagra://scenes/")
         .ok_or_else(|| format!("no resource `{uri}`: resources are lagra://scenes/FILE"))?;
-    let (_, text) = read_scene(dir, name)?;
+    let (_, text) = read_scene(server, name)?;
     Ok(json!({ "contents": [{ "uri": uri, "mimeType": "text/plain", "text": text }] }))
 }

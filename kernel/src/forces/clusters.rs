@@ -8,8 +8,8 @@
 //! The order of every sum is fixed by the list, so the forces are the same bits for any number
 //! of threads; lane k of every row is bit for bit the scalar formula on that pair.
 
-use super::lanes::{norm2, F64x4, Lane, Mask4};
 use super::{Frame, Paired};
+use crate::lanes::{norm2, F64x4, Lane, Mask4};
 use crate::neighbours::{Cluster, Neighbours, CENTRE, EMPTY, LANES};
 use crate::sum::Sum;
 use std::ops::Range;

@@ -22,7 +22,6 @@ mod harmonic_angle;
 mod harmonic_bond;
 mod harmonic_trap;
 mod hydrogen_bond;
-pub mod lanes;
 mod lennard_jones;
 mod magnetic_field;
 mod morse_bond;
@@ -35,13 +34,13 @@ mod yukawa;
 #[cfg(test)]
 pub(crate) mod dual;
 
+use crate::lanes::{self, Lane};
 use crate::state::State;
 use crate::step::Stride;
 use derivative::{Adjoint, Direction, Wanted};
 use groups::{Bonds, Fields};
 use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Kind;
-use lanes::Lane;
 use pairs::Pairs;
 use std::fmt;
 

@@ -4,8 +4,8 @@
 use super::clusters;
 use super::derivative::{coincident, Adjoint, Direction, PairDerivative, Wanted};
 use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
-use super::lanes::F64x4;
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
+use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
 use crate::step::Stride;
 use crate::sum::Sum;

@@ -66,12 +66,31 @@ impl Mobile {
     }
 }
 
-/// One contact in the solve: its bodies (the floor is none), where it holds on each body (in
-/// the body's frame), its depth at the step's start, and, at the current substep, its lever
-/// arms, effective masses and target normal speed; its impulses carry over the substeps.
-struct Row {
+/// One contact as found at the step's start: its bodies (the floor is none), its point, normal,
+/// depth and friction, and where it holds on each body (in the body's frame). Only `prepare`
+/// and the warm start read it; the sweeps read its `Row`.
+struct Found {
     touch: Touch,
     anchors: [V; 2],
+}
+
+impl Found {
+    fn new(touch: Touch, poses: &[Pose]) -> Found {
+        let local = |i: Option<usize>| {
+            i.map_or(touch.point, |i| poses[i].rotation.transpose() * (touch.point - poses[i].centre))
+        };
+        Found { anchors: [local(touch.a), local(Some(touch.b))], touch }
+    }
+}
+
+/// One contact in the solve, what every sweep reads and nothing else (kept apart from `Found`,
+/// so the sweeps stream less memory): its bodies, its directions (normal, two tangents), at the
+/// current substep its lever arms, effective masses and target normal speed; its impulses carry
+/// over the substeps.
+struct Row {
+    a: Option<usize>,
+    b: usize,
+    friction: f64,
     dirs: [V; 3],
     /// Per body (a, b) and direction: r × d, and I⁻¹(r × d), the turn an impulse along d makes.
     arms: [[V; 3]; 2],
@@ -82,34 +101,32 @@ struct Row {
 }
 
 impl Row {
-    fn new(touch: Touch, poses: &[Pose]) -> Row {
-        let local = |i: Option<usize>| {
-            i.map_or(touch.point, |i| poses[i].rotation.transpose() * (touch.point - poses[i].centre))
-        };
-        let n = touch.normal;
+    fn new(f: &Found) -> Row {
+        let n = f.touch.normal;
         let t1 = if n.x.abs() < 0.9 { n.cross(&V::x()) } else { n.cross(&V::y()) }.normalize();
         Row {
-            anchors: [local(touch.a), local(Some(touch.b))],
+            a: f.touch.a,
+            b: f.touch.b,
+            friction: f.touch.friction,
             dirs: [n, t1, n.cross(&t1)],
             arms: [[V::zeros(); 3]; 2],
             turns: [[V::zeros(); 3]; 2],
             mass: [0.0; 3],
             target: 0.0,
             lambda: [0.0; 3],
-            touch,
         }
     }
 
     /// Lever arms, effective masses and target at the current poses: the depth is the step's
     /// minus how far the anchors have parted along the normal since; depth beyond the slop is
     /// fed back, a gap may close within the substep.
-    fn prepare(&mut self, poses: &[Pose], mobile: &[Mobile], h: f64, slop: f64) {
+    fn prepare(&mut self, f: &Found, poses: &[Pose], mobile: &[Mobile], h: f64, slop: f64) {
         let world = |i: Option<usize>, l: &V| i.map_or(*l, |i| poses[i].centre + poses[i].rotation * l);
-        let (wa, wb) = (world(self.touch.a, &self.anchors[0]), world(Some(self.touch.b), &self.anchors[1]));
+        let (wa, wb) = (world(self.a, &f.anchors[0]), world(Some(self.b), &f.anchors[1]));
         // both bodies are pushed at one point, midway between their anchors, so the pair of
         // impulses exerts no net torque: the angular momentum is kept, not only the momentum
         let at = 0.5 * (wa + wb);
-        let bodies = [self.touch.a, Some(self.touch.b)];
+        let bodies = [self.a, Some(self.b)];
         for (side, body) in bodies.into_iter().enumerate() {
             let Some(i) = body else { continue };
             let r = at - poses[i].centre;
@@ -128,7 +145,7 @@ impl Row {
             }
         };
         self.mass = [mass(0), mass(1), mass(2)];
-        let depth = self.touch.depth - self.dirs[0].dot(&(wb - wa));
+        let depth = f.touch.depth - self.dirs[0].dot(&(wb - wa));
         self.target = if depth > slop { FEEDBACK * (depth - slop) / h } else { depth.min(0.0) / h };
     }
 }
@@ -138,10 +155,11 @@ impl Solver for Impulses {
         let h = dt / self.substeps as f64;
         let slop = SLOP * self.solids.margin;
         let mut poses = self.solids.poses(&s.x, &s.spin);
-        let mut rows: Vec<Row> = self.solids.touching(&poses).into_iter().map(|t| Row::new(t, &poses)).collect();
+        let mut found: Vec<Found> = self.solids.touching(&poses).into_iter().map(|t| Found::new(t, &poses)).collect();
         // from the highest contact down: a stack's weight reaches the floor within one sweep
-        rows.sort_by(|a, b| b.touch.point.y.total_cmp(&a.touch.point.y));
-        self.start_warm(&mut rows);
+        found.sort_by(|a, b| b.touch.point.y.total_cmp(&a.touch.point.y));
+        let mut rows: Vec<Row> = found.iter().map(Row::new).collect();
+        self.start_warm(&found, &mut rows);
         // the residual: the largest normal speed the last sweep still had to correct
         let mut residual = 0.0f64;
         for substep in 0..self.substeps {
@@ -151,8 +169,8 @@ impl Solver for Impulses {
                 poses = self.solids.poses(&s.x, &s.spin);
             }
             let mut mobile = mobiles(g, s, &poses);
-            for r in rows.iter_mut() {
-                r.prepare(&poses, &mobile, h, slop);
+            for (r, f) in rows.iter_mut().zip(&found) {
+                r.prepare(f, &poses, &mobile, h, slop);
                 for k in 0..3 {
                     apply(r, &mut mobile, k, r.lambda[k]);
                 }
@@ -174,7 +192,7 @@ impl Solver for Impulses {
             self.at.potential = g.forces(s, &mut self.at.f)?;
         }
         self.iterations.record(self.sweeps * self.substeps, residual);
-        self.keep_warm(&rows);
+        self.keep_warm(&found, &rows);
         Ok(())
     }
 
@@ -217,7 +235,7 @@ fn solve(r: &mut Row, mobile: &mut [Mobile]) -> f64 {
     apply(r, mobile, 0, change);
     r.lambda[0] = total;
     let wanted = [1, 2].map(|k| r.lambda[k] - r.mass[k] * relative(r, mobile, k));
-    let (size, most) = ((wanted[0].powi(2) + wanted[1].powi(2)).sqrt(), r.touch.friction * r.lambda[0]);
+    let (size, most) = ((wanted[0].powi(2) + wanted[1].powi(2)).sqrt(), r.friction * r.lambda[0]);
     let scale = if size > most && size > 0.0 { most / size } else { 1.0 };
     for k in [1, 2] {
         let total = wanted[k - 1] * scale;
@@ -234,13 +252,13 @@ fn solve(r: &mut Row, mobile: &mut [Mobile]) -> f64 {
 /// How fast b moves away from a along direction k at the contact.
 fn relative(r: &Row, mobile: &[Mobile], k: usize) -> f64 {
     let d = &r.dirs[k];
-    mobile[r.touch.b].speed(d, &r.arms[1][k]) - r.touch.a.map_or(0.0, |a| mobile[a].speed(d, &r.arms[0][k]))
+    mobile[r.b].speed(d, &r.arms[1][k]) - r.a.map_or(0.0, |a| mobile[a].speed(d, &r.arms[0][k]))
 }
 
 /// An impulse `amount` along direction k: on b, and its opposite on a, at the contact.
 fn apply(r: &Row, mobile: &mut [Mobile], k: usize, amount: f64) {
-    mobile[r.touch.b].nudge(&r.dirs[k], &r.turns[1][k], amount);
-    if let Some(a) = r.touch.a {
+    mobile[r.b].nudge(&r.dirs[k], &r.turns[1][k], amount);
+    if let Some(a) = r.a {
         mobile[a].nudge(&r.dirs[k], &r.turns[0][k], -amount);
     }
 }
@@ -248,24 +266,24 @@ fn apply(r: &Row, mobile: &mut [Mobile], k: usize, amount: f64) {
 impl Impulses {
     /// Each row starts from the impulses of last step's nearest contact of the same pair (within
     /// twice the margin).
-    fn start_warm(&self, rows: &mut [Row]) {
+    fn start_warm(&self, found: &[Found], rows: &mut [Row]) {
         let reach = self.solids.margin * self.solids.margin * 4.0;
-        for r in rows.iter_mut() {
-            let key = (r.touch.a.map_or(usize::MAX, |a| a), r.touch.b);
+        for (r, f) in rows.iter_mut().zip(found) {
+            let key = (r.a.map_or(usize::MAX, |a| a), r.b);
             let Some(old) = self.warm.get(&key) else { continue };
             let near =
-                old.iter().map(|(p, l)| ((p - r.touch.point).norm_squared(), l)).min_by(|a, b| a.0.total_cmp(&b.0));
+                old.iter().map(|(p, l)| ((p - f.touch.point).norm_squared(), l)).min_by(|a, b| a.0.total_cmp(&b.0));
             if let Some((_, lambda)) = near.filter(|n| n.0 <= reach) {
                 r.lambda = *lambda;
             }
         }
     }
 
-    fn keep_warm(&mut self, rows: &[Row]) {
+    fn keep_warm(&mut self, found: &[Found], rows: &[Row]) {
         self.warm.clear();
-        for r in rows {
-            let key = (r.touch.a.map_or(usize::MAX, |a| a), r.touch.b);
-            self.warm.entry(key).or_default().push((r.touch.point, r.lambda));
+        for (r, f) in rows.iter().zip(found) {
+            let key = (r.a.map_or(usize::MAX, |a| a), r.b);
+            self.warm.entry(key).or_default().push((f.touch.point, r.lambda));
         }
     }
 }

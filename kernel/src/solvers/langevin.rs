@@ -6,8 +6,8 @@
 
 use super::{implicit_kick, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
-use crate::random::normal;
 use crate::state::State;
+use lagra_lang::random::normal;
 
 pub struct Baoab {
     pub at: Evaluated,

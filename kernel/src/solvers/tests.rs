@@ -2,12 +2,8 @@
 //! invariants, and the same bits on any number of threads.
 
 use super::*;
-use crate::lang::compile;
-use crate::scene::Scene;
-
-fn start(scene: &Scene) -> State {
-    scene.start()
-}
+use crate::setup::{compile, start};
+use lagra_lang::Scene;
 
 /// Runs a scene's own solver to time `t` at step `dt` (with the scene's settings).
 fn run_to(scene: &Scene, dt: f64, t: f64) -> State {

@@ -4,11 +4,11 @@
 use lagra_checker::model::Snapshot;
 use lagra_checker::quantities::Lifted;
 use lagra_checker::terms::{Kind, Shape};
-use lagra_kernel::lang::compile;
-use lagra_kernel::run::{run, Options};
-use lagra_kernel::trace::{Format, Writer};
 use lagra_noether::{parameter_names, Symmetry, Table, Verdict};
 use lagra_noether_derive::{derive, lock::Exclusive, render, sym};
+use lagra_run::compile;
+use lagra_run::run::{run, Options};
+use lagra_run::trace::{Format, Writer};
 use std::collections::HashMap;
 use std::path::Path;
 use symbolica::prelude::*;

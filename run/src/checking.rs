@@ -5,10 +5,10 @@
 //! steps before the last checkpoint, to list that checkpoint's pairs ahead (`Monitor::foresee`):
 //! the last checkpoint is the one nothing overlaps, and the list changes no bit of its verdict.
 
-use crate::state::State;
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 use lagra_checker::monitor::{is_balance, next_checkpoint, Halt, Monitor};
+use lagra_kernel::state::State;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 
@@ -170,16 +170,16 @@ impl Overlap<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::lang::compile;
+    use crate::compile;
     use crate::run::{run, Options, Report, Stop};
 
     /// 1,372 LJ atoms, energy and momentum checked every 10 steps; `tol` decides whether the
     /// energy claim breaks part-way.
-    fn melt(tol: f64) -> crate::scene::Scene {
+    fn melt(tol: f64) -> lagra_lang::scene::Scene {
         melt_every(tol, 10)
     }
 
-    fn melt_every(tol: f64, every: u64) -> crate::scene::Scene {
+    fn melt_every(tol: f64, every: u64) -> lagra_lang::scene::Scene {
         compile(&format!(
             "scene m {{ entity atom {{ mass: 1 }}
                lattice {{ type: atom, density: 0.8442, cells: [7, 7, 7], temperature: 1.44, seed: 3 }}
@@ -193,7 +193,7 @@ mod tests {
 
     /// A run with a trace cannot overlap (the trace would show states past a breach): the
     /// reference, inline.
-    fn both(scene: &crate::scene::Scene) -> (Report, Report) {
+    fn both(scene: &lagra_lang::scene::Scene) -> (Report, Report) {
         let overlapped = run(
             scene,
             Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
@@ -270,7 +270,7 @@ mod tests {
     }
 
     /// A run with a progress report, and the steps it was called at.
-    fn with_progress(scene: &crate::scene::Scene) -> (Report, Vec<u64>) {
+    fn with_progress(scene: &lagra_lang::scene::Scene) -> (Report, Vec<u64>) {
         let mut reached = vec![];
         let mut tick = |step: u64| reached.push(step);
         let r = run(
@@ -356,7 +356,7 @@ mod tests {
         )
         .unwrap();
         let mut seen = vec![];
-        let mut see = |s: &crate::state::State| seen.push((s.step, s.x[7]));
+        let mut see = |s: &lagra_kernel::state::State| seen.push((s.step, s.x[7]));
         let watch = Some(crate::run::Watch { every: 7, see: &mut see });
         let watched = run(
             &scene,

@@ -1,8 +1,8 @@
 //! Physical units written after a number: each word is a known unit with a dimension and a
 //! factor to SI base units (kg, m, s, C).
 
-use super::diagnostic::{Diagnostic, Span};
-use super::{Pair, Rule};
+use crate::diagnostic::{Diagnostic, Span};
+use crate::{Pair, Rule};
 use lagra_checker::units::Dim;
 
 /// A unit expression reduced to its dimension and its factor to SI, `factor · 10^exp10`. The
@@ -107,8 +107,8 @@ fn group(pair: Pair) -> Result<Unit, Diagnostic> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{LagraParser, Rule};
     use super::*;
+    use crate::{LagraParser, Rule};
     use pest::Parser;
 
     fn parse(s: &str) -> Result<Unit, Diagnostic> {

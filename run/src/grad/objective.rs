@@ -6,12 +6,12 @@
 //! Observables: `position[I].x` (`.y`, `.z`), `velocity[I].x`, `kinetic`, `potential`,
 //! `energy` (T + V), `distance[I,J]` (the nearest image in a periodic box).
 
-use crate::forces::derivative::{Adjoint, Wanted};
-use crate::forces::Singularity;
-use crate::graph::LagrangianGraph;
-use crate::scene::Scene;
-use crate::state::{kinetic, State};
 use lagra_checker::model::Cell;
+use lagra_kernel::forces::derivative::{Adjoint, Wanted};
+use lagra_kernel::forces::Singularity;
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::state::{kinetic, State};
+use lagra_lang::scene::Scene;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Quantity {
@@ -44,9 +44,20 @@ fn index(s: &str, n: usize, what: &str) -> Result<usize, String> {
 
 impl Objective {
     pub fn parse(spelling: &str, scene: &Scene) -> Result<Objective, String> {
+        Objective::parse_reading(spelling, scene, &|f| std::fs::read_to_string(f).map_err(|e| e.to_string()))
+    }
+
+    /// `parse`, with the target trace of `mse:FILE` read by `read` (a front's bounded reader,
+    /// confined to its roots where it has some).
+    pub fn parse_reading(
+        spelling: &str,
+        scene: &Scene,
+        read: &dyn Fn(&str) -> Result<String, String>,
+    ) -> Result<Objective, String> {
         let n = scene.model.bodies.len();
         if let Some(file) = spelling.strip_prefix("mse:") {
-            return Objective::mse(file, n, scene.solver.steps);
+            let text = read(file).map_err(|e| format!("cannot read the target trace {file}: {e}"))?;
+            return Objective::mse(file, &text, n, scene.solver.steps);
         }
         let (what, when) = spelling
             .rsplit_once('@')
@@ -93,8 +104,7 @@ impl Objective {
     }
 
     /// The target trace: every line's step and positions, in the run's span.
-    fn mse(file: &str, n: usize, steps: u64) -> Result<Objective, String> {
-        let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read the target trace {file}: {e}"))?;
+    fn mse(file: &str, text: &str, n: usize, steps: u64) -> Result<Objective, String> {
         let mut target: Vec<(u64, Vec<[f64; 3]>)> = vec![];
         for (k, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
             let at = format!("{file}:{}", k + 1);
@@ -221,7 +231,7 @@ fn kinetic_gradient(s: &State, masses: &[f64], wanted: &Wanted, out: &mut Adjoin
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lang::compile;
+    use crate::compile;
 
     #[test]
     fn spellings_and_their_errors() {

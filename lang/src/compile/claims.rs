@@ -2,10 +2,10 @@
 //! Langevin bath refuses.
 
 use super::{err, Compiler};
-use crate::lang::block::{value_span, word, Block, Field};
-use crate::lang::diagnostic::{Diagnostic, Span};
-use crate::lang::Pair;
+use crate::block::{value_span, word, Block, Field};
+use crate::diagnostic::{Diagnostic, Span};
 use crate::scene::NoetherRequest;
+use crate::Pair;
 use lagra_checker::claims::{Between, Claim, ClaimKind};
 use lagra_checker::units::Dim;
 

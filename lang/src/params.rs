@@ -182,7 +182,7 @@ pub fn apply_settings(scene: &mut Scene, settings: &[String]) -> Result<(), Stri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lang::compile;
+    use crate::compile;
 
     fn scene() -> Scene {
         compile(

@@ -3,8 +3,8 @@
 //! written in the shortest form that reads back to the same binary64, so a reader gets the
 //! exact state.
 
-use crate::state::State;
 use lagra_checker::model::Cell;
+use lagra_kernel::state::State;
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;

@@ -2,12 +2,11 @@
 //! written, and solids checked to start apart.
 
 use super::{err, Compiler};
-use crate::contact::Solids;
-use crate::lang::block::{value_span, word, Block, Field};
-use crate::lang::diagnostic::{Diagnostic, Span};
-use crate::lang::lattice::{self, Draw, Packing};
-use crate::lang::shape;
-use lagra_checker::model::{Body, Cell, Floor, Model, UnitSystem};
+use crate::block::{value_span, word, Block, Field};
+use crate::diagnostic::{Diagnostic, Span};
+use crate::lattice::{self, Draw, Packing};
+use crate::shape;
+use lagra_checker::model::{Body, Cell, Floor, UnitSystem};
 use lagra_checker::terms::Kind;
 use lagra_checker::units::Dim;
 
@@ -233,36 +232,5 @@ impl<'a> Compiler<'a> {
         b.check_names("floor", &names)?;
         self.floor = Some((Floor { y, friction }, at));
         Ok(())
-    }
-}
-
-/// Solids must start apart and above the floor: the contact solver would fling overlapping
-/// bodies apart. An overlap is an error at the later body's entity (or at the floor).
-pub(super) fn apart(
-    model: &Model,
-    x: &[[f64; 3]],
-    spin: &[[f64; 7]],
-    at: &[Option<Span>],
-    floor_at: Option<Span>,
-) -> Result<(), Diagnostic> {
-    let Some(solids) = Solids::of(model) else { return Ok(()) };
-    // well above rounding, well below any overlap the solver would have to undo
-    let tolerance = 1e-6 * solids.margin;
-    let touches = solids.touching(&solids.poses(x, spin));
-    match touches.into_iter().find(|t| t.depth > tolerance) {
-        None => Ok(()),
-        Some(t) => {
-            let depth = t.depth;
-            match t.a {
-                None => err(
-                    at[t.b].or(floor_at).expect("a floor contact has a floor"),
-                    format!("body {} starts {depth:.3e} below the floor: solids must start apart", t.b),
-                ),
-                Some(a) => err(
-                    at[a.max(t.b)].expect("a solid was declared"),
-                    format!("bodies {a} and {} start interpenetrated by {depth:.3e}: solids must start apart", t.b),
-                ),
-            }
-        }
     }
 }

@@ -3,16 +3,17 @@
 //! state halts the run at that step.
 
 use crate::checking::{can_overlap, Checking};
-use crate::graph::LagrangianGraph;
 use crate::observables::{Observables, Observer};
-use crate::predict::{Meter, Prediction};
-use crate::scene::Scene;
-use crate::solvers::{Iterations, Stepper};
-use crate::state::{kinetic, State};
+use crate::predict::Meter;
 use crate::trace::Frames;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, Monitor, Outcome};
 use lagra_checker::terms::Kind;
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::solvers::{Iterations, Stepper};
+use lagra_kernel::state::{kinetic, State};
+use lagra_lang::prediction::Prediction;
+use lagra_lang::scene::Scene;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -108,7 +109,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
     let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
-    let mut state = scene.start();
+    let mut state = lagra_kernel::setup::start(&scene);
     let mut observer = Observer::new(scene, &graph, steps)?;
     let mut meters: Vec<(Meter, &Prediction)> =
         scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, scene.bath()), p)).collect();

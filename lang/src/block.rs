@@ -1,9 +1,9 @@
 //! `{ name: value, ... }` blocks and typed reading of their values: numbers are checked for
 //! length, finiteness and dimension, and converted to the scene's unit system.
 
-use super::diagnostic::{Diagnostic, Span};
-use super::units::unit;
-use super::{Pair, Rule};
+use crate::diagnostic::{Diagnostic, Span};
+use crate::units::unit;
+use crate::{Pair, Rule};
 use lagra_checker::model::UnitSystem;
 use lagra_checker::units::Dim;
 

@@ -9,9 +9,9 @@
 //! pair and is refused, as is one whose integrals do not converge (a tail decaying like r⁻³ or
 //! slower).
 
-use crate::derivatives::exact::along;
 use lagra_checker::model::Model;
 use lagra_checker::terms::{Kind, Shape};
+use lagra_kernel::derivatives::exact::along;
 use serde::Serialize;
 
 /// Per body of energy, and of pressure, at the model's density.
@@ -106,7 +106,7 @@ const GAUSS: [(f64, f64); 5] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lang::compile;
+    use crate::compile;
     use std::f64::consts::PI;
 
     fn liquid(term: &str) -> Result<Tail, String> {

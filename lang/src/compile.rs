@@ -1,13 +1,12 @@
 //! From the parse tree to a [`Scene`]: templates resolved, terms looked up in the checker's
 //! vocabulary, every number checked for dimension and converted, every index checked.
 
-use super::block::{flags, typed, value_span, Block, Reader};
-use super::diagnostic::{Diagnostic, Span};
-use super::{Pair, Rule};
-use crate::predict::{Prediction, PredictionKind};
-use crate::scene::{NoetherRequest, Sampling, Scene};
-use crate::tail::Tail;
+use crate::block::{flags, typed, value_span, Block, Reader};
+use crate::diagnostic::{Diagnostic, Span};
+use crate::prediction::{Prediction, PredictionKind};
+use crate::scene::{NoetherRequest, Sampling, Scene, Spans};
 use crate::thermostat::{self, Bath, Thermostat};
+use crate::{Pair, Rule};
 use lagra_checker::claims::{Claim, ClaimKind};
 use lagra_checker::model::{Body, Cell, Floor, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
@@ -18,7 +17,7 @@ mod bodies;
 mod claims;
 mod solver;
 
-use bodies::{apart, BUILTIN_TYPES, ENTITY_FIELDS};
+use bodies::{BUILTIN_TYPES, ENTITY_FIELDS};
 use claims::refuse_under_langevin;
 use solver::SolverBlock;
 
@@ -305,7 +304,7 @@ impl<'a> Compiler<'a> {
             return err(at, "tail_corrections apply to the measured observables: give `equilibrate` too");
         }
         let solver = self.settle(block)?;
-        let constraints = self.constrain(&cell, &solver.settings)?;
+        let constraints = self.constrain(&cell)?;
         for (c, s) in self.claims.iter().zip(&self.claim_spans) {
             if c.kind == ClaimKind::ConstraintSatisfied && constraints.is_empty() {
                 return err(*s, "constraint_satisfied: the scene declares no constraint");
@@ -320,7 +319,6 @@ impl<'a> Compiler<'a> {
             thermostat: None,
             floor: self.floor.map(|f| f.0),
         };
-        apart(&model, &self.x0, &self.spin0, &self.solid_at, self.floor.map(|f| f.1))?;
         for (c, s) in self.claims.iter().zip(&self.claim_spans) {
             if matches!(c.kind, ClaimKind::Resting | ClaimKind::NoPenetration) {
                 c.validate(&model).map_err(|e| Diagnostic::new(*s, e))?;
@@ -351,10 +349,14 @@ impl<'a> Compiler<'a> {
                 Some(t)
             }
         };
-        if let Some(at) = tail_at {
-            Tail::of(&model).map_err(|e| Diagnostic::new(at, e))?;
-        }
         let bath = thermostat.as_ref().map(|t| Bath::of(t, &model));
+        let spans = Spans {
+            constraints: self.constraints.iter().map(|c| c.2).collect(),
+            solids: self.solid_at,
+            floor: self.floor.map(|f| f.1),
+            tail_corrections: tail_at,
+            predictions: self.predictions.iter().map(|p| p.2).collect(),
+        };
         let predictions = self
             .predictions
             .into_iter()
@@ -379,6 +381,7 @@ impl<'a> Compiler<'a> {
             solver,
             thermostat,
             sampling,
+            spans,
         })
     }
 }

@@ -16,17 +16,17 @@
 //!   for velocity-dependent forces, as the solver solves it).
 
 mod objective;
-pub mod params;
 
 pub use objective::{Objective, Quantity};
-pub use params::{Named, Param};
 
-use crate::forces::derivative::{Adjoint, Direction, Wanted};
-use crate::forces::Kept;
-use crate::graph::LagrangianGraph;
-use crate::scene::Scene;
-use crate::solvers::{Evaluated, Integrator, Stepper};
-use crate::state::State;
+use lagra_kernel::forces::derivative::{Adjoint, Direction, Wanted};
+use lagra_kernel::forces::Kept;
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::solvers::{Evaluated, Stepper};
+use lagra_kernel::state::State;
+use lagra_lang::integrator::Integrator;
+use lagra_lang::params::{Named, Param};
+use lagra_lang::Scene;
 use serde::Serialize;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -118,7 +118,7 @@ impl<'a> Run<'a> {
     }
 
     fn start(&self) -> State {
-        self.scene.start()
+        lagra_kernel::setup::start(&self.scene)
     }
 
     fn value(&self, objective: &Objective, s: &State, potential: f64) -> f64 {
@@ -149,7 +149,7 @@ impl<'a> Run<'a> {
     }
 }
 
-fn failed(step: u64) -> impl Fn(crate::solvers::Failure) -> String {
+fn failed(step: u64) -> impl Fn(lagra_kernel::solvers::Failure) -> String {
     move |e| format!("the run failed at step {step}: {e}")
 }
 

@@ -6,13 +6,13 @@
 //! independent measurement (so the error is honest only if a block is longer than the
 //! correlation time; the report says how many samples each block held).
 
-use crate::graph::LagrangianGraph;
-use crate::scene::{Sampling, Scene};
-use crate::state::{kinetic, State};
 use crate::tail::Tail;
-use crate::thermostat::degrees_of_freedom;
-use crate::traverse;
 use lagra_checker::model::Cell;
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::state::{kinetic, State};
+use lagra_kernel::traverse;
+use lagra_lang::scene::{Sampling, Scene};
+use lagra_lang::thermostat::degrees_of_freedom;
 use serde::Serialize;
 
 /// Blocks a production run is cut into for the standard errors.
@@ -97,7 +97,7 @@ impl Observer {
         let mut notes = vec![];
         let cell = model.cell.filter(|c| c.periodic == [true; 3]);
         let volume = cell.map(|c| c.size.iter().product::<f64>());
-        let probe = g.virial(&scene.start()).is_some();
+        let probe = g.virial(&lagra_kernel::setup::start(&scene)).is_some();
         let virial = volume.is_some() && probe;
         if volume.is_none() {
             notes.push("pressure: needs a box periodic along every axis".into());
@@ -267,7 +267,7 @@ mod tests {
 
     #[test]
     fn block_errors_shrink_like_one_over_root_n_for_independent_samples() {
-        let draw = |n: u64| (0..n).map(|i| crate::random::normal(3, 0, i)).collect::<Vec<f64>>();
+        let draw = |n: u64| (0..n).map(|i| lagra_lang::random::normal(3, 0, i)).collect::<Vec<f64>>();
         let (small, large) = (estimate(&draw(1000)), estimate(&draw(100_000)));
         let ratio = small.stderr.unwrap() / large.stderr.unwrap();
         assert!((5.0..20.0).contains(&ratio), "{ratio}: √100 = 10 expected");
@@ -287,7 +287,7 @@ mod tests {
             }
             for (i, xi) in x.iter_mut().enumerate() {
                 for (c, xc) in xi.iter_mut().enumerate() {
-                    *xc += (2.0 * d * dt).sqrt() * crate::random::normal(5, step, 3 * i as u64 + c as u64);
+                    *xc += (2.0 * d * dt).sqrt() * lagra_lang::random::normal(5, step, 3 * i as u64 + c as u64);
                 }
             }
         }
@@ -298,8 +298,8 @@ mod tests {
 
 #[cfg(test)]
 mod virial {
-    use crate::graph::LagrangianGraph;
-    use crate::lang::compile;
+    use crate::compile;
+    use lagra_kernel::graph::LagrangianGraph;
 
     /// The virial is the energy's response to stretching the box: with every position and the
     /// box scaled by λ, dU/dλ at λ = 1 is −W (through the neighbour list, with periodic images,
@@ -317,8 +317,8 @@ mod virial {
         .unwrap();
         // melt a little, so that no pair sits on a lattice distance
         let g = LagrangianGraph::new(&scene.model);
-        let mut s = scene.start();
-        let mut st = crate::solvers::Stepper::for_scene(&scene, &g, &s).unwrap();
+        let mut s = lagra_kernel::setup::start(&scene);
+        let mut st = lagra_kernel::solvers::Stepper::for_scene(&scene, &g, &s).unwrap();
         st.advance_to(&g, &mut s, 0.005, 50).unwrap();
         let w = g.virial(&s).unwrap().unwrap();
         let energy = |l: f64| {
@@ -341,6 +341,6 @@ mod virial {
         let scene =
             compile("scene f { entity { position: [0, 0, 0], mass: 1 } gravity { g: [0, -1, 0] } solver { dt: 0.1 } }")
                 .unwrap();
-        assert!(LagrangianGraph::new(&scene.model).virial(&scene.start()).is_none());
+        assert!(LagrangianGraph::new(&scene.model).virial(&lagra_kernel::setup::start(&scene)).is_none());
     }
 }

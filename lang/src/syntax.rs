@@ -1,7 +1,7 @@
 //! pest's syntax errors, said in the language's own words.
 
-use super::diagnostic::{Diagnostic, Span};
-use super::Rule;
+use crate::diagnostic::{Diagnostic, Span};
+use crate::Rule;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 fn describe(r: &Rule) -> &'static str {

@@ -2,14 +2,13 @@
 //! the initial state is placed on.
 
 use super::{err, Compiler};
-use crate::constraints::{Constraints, Tolerance};
-use crate::lang::block::{value_span, word, Block};
-use crate::lang::diagnostic::{Diagnostic, Span};
-use crate::lang::Pair;
+use crate::block::{value_span, word, Block};
+use crate::diagnostic::{Diagnostic, Span};
+use crate::integrator::{Integrator, Settings};
 use crate::scene::Solver;
-use crate::solvers::{Integrator, Settings};
 use crate::thermostat::Thermostat;
-use lagra_checker::model::{Cell, Constraint, Model};
+use crate::Pair;
+use lagra_checker::model::{Cell, Constraint};
 use lagra_checker::units::Dim;
 
 /// Run length when the solver gives neither `steps` nor `duration`.
@@ -192,13 +191,9 @@ impl<'a> Compiler<'a> {
     }
 
     /// Each constraint with its length (the bodies' initial distance if none is given), the
-    /// initial state checked to meet them within 10⁻⁶ and then moved onto them exactly (to the
-    /// solver's tolerance), the velocities made tangent.
-    pub(super) fn constrain(
-        &mut self,
-        cell: &Option<Cell>,
-        settings: &Settings,
-    ) -> Result<Vec<Constraint>, Diagnostic> {
+    /// initial state checked to meet them within 10⁻⁶ (the kernel then moves it onto them exactly,
+    /// `lagra_kernel::setup::place`).
+    pub(super) fn constrain(&mut self, cell: &Option<Cell>) -> Result<Vec<Constraint>, Diagnostic> {
         const PLACED: f64 = 1e-6;
         let mut out = vec![];
         for &([i, j], length, at) in &self.constraints {
@@ -213,30 +208,6 @@ impl<'a> Compiler<'a> {
             }
             out.push(Constraint { bodies: [i, j], length });
         }
-        let model = Model {
-            units: self.rd.system,
-            cell: *cell,
-            bodies: self.bodies.clone(),
-            terms: vec![],
-            constraints: out,
-            thermostat: None,
-            floor: None,
-        };
-        if let Some(k) = Constraints::of(&model) {
-            let tol = Tolerance { tol: settings.tol.min(1e-12), sweeps: settings.iterations.max(1000) };
-            let inverse: Vec<f64> = self.bodies.iter().map(|b| 1.0 / b.mass).collect();
-            let before = self.x0.clone();
-            let mut scratch = self.v0.clone();
-            let placed = k
-                .positions(&before, &mut self.x0, &mut scratch, &inverse, 1.0, tol)
-                .and_then(|_| k.velocities(&self.x0, &mut self.v0, &inverse, 1.0, tol));
-            if let Err(e) = placed {
-                return err(
-                    self.constraints[e.constraint].2,
-                    format!("the initial state cannot be placed on the constraints: {e}"),
-                );
-            }
-        }
-        Ok(model.constraints)
+        Ok(out)
     }
 }

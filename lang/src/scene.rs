@@ -1,10 +1,10 @@
-//! A compiled scene: the canonical model the checker sees, the initial state, the claims, the
-//! solver settings and the predictions to compare against.
+//! A compiled scene, data only: the canonical model the checker sees, the initial state, the
+//! claims, the solver's name and settings, the predictions to compare against, and where each
+//! thing was written (for what the engine finds wrong before the first step).
 
-use crate::lang::Span;
-use crate::predict::Prediction;
-use crate::solvers::{Integrator, Settings};
-use crate::state::State;
+use crate::diagnostic::Span;
+use crate::integrator::{Integrator, Settings};
+use crate::prediction::Prediction;
 use crate::thermostat::{Bath, Thermostat};
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
@@ -30,19 +30,6 @@ pub struct NoetherRequest {
 }
 
 impl Scene {
-    /// The state the run starts from: step 0, the initial positions and velocities, a
-    /// thermostat chain at rest.
-    pub fn start(&self) -> State {
-        State {
-            step: 0,
-            t: 0.0,
-            x: self.x0.clone(),
-            v: self.v0.clone(),
-            chain: vec![[0.0; 2]; self.model.links()],
-            spin: self.spin0.clone(),
-        }
-    }
-
     /// The temperature the scene's thermostat holds, if it has one.
     pub fn bath(&self) -> Option<Bath> {
         self.thermostat.as_ref().map(|t| Bath::of(t, &self.model))
@@ -84,6 +71,24 @@ pub struct Scene {
     pub thermostat: Option<Thermostat>,
     /// What the run measures along the way (after `equilibrate`), if anything.
     pub sampling: Option<Sampling>,
+    /// Where the things the engine checks before the first step were written.
+    pub spans: Spans,
+}
+
+/// Where a scene wrote what the engine may still refuse (`lagra_run::compile`): the initial
+/// state placed on the constraints, solids apart, tail corrections worked out.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Spans {
+    /// Each of `model.constraints`.
+    pub constraints: Vec<Span>,
+    /// Each body's entity if it is a rigid body.
+    pub solids: Vec<Option<Span>>,
+    /// The rigid floor.
+    pub floor: Option<Span>,
+    /// `tail_corrections: true`.
+    pub tail_corrections: Option<Span>,
+    /// Each of `predictions`.
+    pub predictions: Vec<Span>,
 }
 
 /// `equilibrate`, `sample_every`, `tail_corrections` in the solver block: the observables are

@@ -3,7 +3,8 @@
 //! and on random small scenes.
 
 use super::*;
-use crate::lang::compile;
+use crate::compile;
+use lagra_lang::params;
 use proptest::prelude::*;
 
 fn grad(scene: &Scene, objective: &str, wrt: &str, method: Method) -> Gradient {
