@@ -13,7 +13,7 @@ use std::path::{Component, Path, PathBuf};
 pub struct Limits {
     /// A `.lagra` source (also an inline `scene` string).
     pub scene: u64,
-    /// A certificate (also a target trace for `mse:`).
+    /// A certificate (also a trace: an `mse:` target, what `lagra view` plays).
     pub certificate: u64,
     /// A state file.
     pub states: u64,

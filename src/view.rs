@@ -184,9 +184,9 @@ pub fn main(a: Args) -> ExitCode {
         ExitCode::from(2)
     };
     let name = a.trace.display().to_string();
-    let trace = match std::fs::read_to_string(&a.trace) {
+    let trace = match crate::reading::text(&a.trace, crate::reading::Limits::from_env().certificate) {
         Ok(t) => t,
-        Err(e) => return bad(format!("cannot read {name}: {e}")),
+        Err(e) => return bad(e),
     };
     let scene = match &a.scene {
         None => None,
