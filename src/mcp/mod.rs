@@ -17,12 +17,11 @@
 //! tool a protocol error, a failing tool a result with `isError`.
 //!
 //! The server reads only under its roots (`--root`, the folder it was started in by default,
-//! and the folder of scenes it offers),
-//! narrowed to the client's where the client offers them (`roots/list`, asked after the
-//! handshake and again when the client says they changed); every path is resolved, symlinks
-//! included, before it is checked. Every input is bounded: files (regular files only, within
-//! `reading::Limits`), inline scenes, `set` lists, a message's line, a run's atom-steps. It writes
-//! no file.
+//! and the folder of scenes it offers), narrowed to the client's where the client offers them
+//! (`roots/list`, asked after the handshake and again when the client says they changed; until
+//! the answer comes, the server's own apply); every path is resolved, symlinks included, before
+//! it is checked. Every input is bounded: files (regular files only, within `reading::Limits`),
+//! inline scenes, `set` lists, a message's line, a run's atom-steps. It writes no file.
 
 mod tools;
 
@@ -205,7 +204,8 @@ fn handle(server: &Arc<Server>, line: &str) -> Option<std::thread::JoinHandle<()
     let id = message.get("id").cloned();
     let method = message.get("method").and_then(Value::as_str);
     let (Some(method), true) = (method, message.get("jsonrpc") == Some(&json!("2.0"))) else {
-        // a response from the client (we send no requests) is dropped; anything else is invalid
+        // a response from the client answers our one request (`roots/list`); anything else is
+        // invalid
         let response = message.get("result").is_some() || message.get("error").is_some();
         if let (Some(id), true) = (&id, response) {
             server.answered(id, &message);
