@@ -56,6 +56,9 @@ pub struct Summary {
     pub plan: Vec<(&'static str, String)>,
     /// Where the checker ran.
     pub checker: &'static str,
+    /// The helper threads the checker started for its sums: 0 where no checkpoint was big enough
+    /// to spread, else one pool for the whole run (never a thread per checkpoint).
+    pub checker_helpers: usize,
     /// Print the plan in the text report too (`--explain`).
     #[serde(skip)]
     explain: bool,
@@ -118,6 +121,7 @@ impl Summary {
             threads,
             plan: r.plan.iter().map(|(k, p)| (k.name(), p.clone())).collect(),
             checker: r.checker,
+            checker_helpers: lagra_checker::quantities::helpers_started(),
             explain,
             claims,
             predictions: r.predictions.clone(),

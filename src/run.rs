@@ -52,11 +52,12 @@ pub struct Args {
     /// body[0].mass, ...); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
-    /// Threads for the forces. Any count gives the same bits; more help only on thousands of
-    /// bodies with pair terms.
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    threads: usize,
-    /// Print how each term group visits its bodies (every pair, cell list, Verlet list, chunks).
+    /// Threads for the forces and the checker's sums (at most 1024). Any count gives the same
+    /// bits. Without it: the physical cores for scenes of 16,384 bodies or more, else one
+    /// (the report says which)
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Print how each term group visits its bodies (every pair, cell list, Verlet list, pieces).
     #[arg(long)]
     explain: bool,
     /// A progress bar on stderr (steps, steps per second, time left, claims): `auto` shows it
@@ -152,15 +153,16 @@ pub fn main(a: Args) -> ExitCode {
         Err(e) => return bad(e),
     };
     let scene = &prepared.scene;
+    let threads = match lagra_run::run::threads_for(scene.model.bodies.len(), a.threads) {
+        Ok(t) => t,
+        Err(e) => return bad(e),
+    };
     prepared.warnings.iter().for_each(|w| eprintln!("{w}"));
     if a.strict && !prepared.warnings.is_empty() {
         return bad("--strict: a declared claim contradicts the scene's symmetries (see above)");
     }
     if a.steps == Some(0) {
         return bad("--steps must be at least 1");
-    }
-    if a.threads == 0 {
-        return bad("--threads must be at least 1");
     }
     // the trace goes to its file, and, for a page, to memory as well
     let format = match a.trace.as_deref().map(Format::of).transpose() {
@@ -200,7 +202,7 @@ pub fn main(a: Args) -> ExitCode {
             steps: a.steps,
             trace: tracing.then_some(&mut both as &mut dyn Frames),
             record: a.states.is_some().then_some(&mut record),
-            threads: a.threads,
+            threads,
             progress: shown.then_some(&mut tick),
             stop: None,
             watch: None,
@@ -217,7 +219,7 @@ pub fn main(a: Args) -> ExitCode {
         Ok(sum) => sum.map(label),
         Err(e) => return bad(format!("writing the state file: {e}")),
     };
-    let summary = summarize(&path, &prepared, &rep, a.threads, a.explain);
+    let summary = summarize(&path, &prepared, &rep, threads, a.explain);
     if a.certificate.is_some() || a.view.is_some() {
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {

@@ -319,7 +319,7 @@ fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
         let o = lagra(&["run", scene, "--threads", threads, "--explain", "--trace", trace.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
         assert!(stdout(&o).contains("plan        LennardJonesShifted: cluster-pair list"), "{}", stdout(&o));
-        assert!(stdout(&o).contains("4 fixed chunks"), "{}", stdout(&o));
+        assert!(stdout(&o).contains("piece(s) by size"), "{}", stdout(&o));
         traces.push(std::fs::read(trace).unwrap());
     }
     assert!(traces[0].len() > 100_000);

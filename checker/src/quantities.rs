@@ -10,7 +10,14 @@ use std::sync::Arc;
 
 mod pair_sums;
 
-pub use pair_sums::{asked_reach, foresee, pair_reaches, PairSum};
+/// Bodies from which a checkpoint's pair sums spread over the helpers (`Lifted::on_threads`):
+/// handing a sum out and waking the helpers costs tens of microseconds. Measured (2-CPU AMD
+/// EPYC, LJ liquid, energy judged every step, 200 steps, always spread on 2 CPUs against one
+/// CPU): 256 bodies 0.15 against 0.12 s, 864 bodies 0.40 against 0.46 s, 2,048 bodies 0.78
+/// against 0.97 s.
+const SPREAD_FROM: usize = 512;
+
+pub use pair_sums::{asked_reach, foresee, helpers_started, pair_reaches, PairSum};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {
@@ -78,9 +85,10 @@ impl<R: PairSum> Lifted<R> {
         self.sites
     }
 
-    /// The same, summing pair terms on `n` threads.
+    /// The same, summing pair terms on `n` threads if there are bodies enough to pay for
+    /// handing the work out (`SPREAD_FROM`), else on one.
     pub fn on_threads(self, n: usize) -> Self {
-        Lifted { threads: n, ..self }
+        Lifted { threads: if self.x.len() >= SPREAD_FROM { n } else { 1 }, ..self }
     }
 
     /// The same, with pair lists made ahead (`foresee`).

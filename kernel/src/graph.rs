@@ -19,6 +19,9 @@ use lagra_checker::terms::Kind;
 use nalgebra::Vector3;
 use std::sync::Arc;
 
+/// Bodies from which the passes over them spread over the run's threads (`spread`).
+const SPREAD_FROM: usize = 4 * step::BLOCK;
+
 pub struct LagrangianGraph {
     pub masses: Vec<f64>,
     /// 1/m, so a kick multiplies.
@@ -35,6 +38,8 @@ pub struct LagrangianGraph {
     rigid: Vec<bool>,
     /// What can touch, if anything.
     solids: Option<Solids>,
+    /// The run's threads, if it has more than one.
+    pool: Pool,
 }
 
 /// Which forces an evaluation adds up.
@@ -94,6 +99,7 @@ impl LagrangianGraph {
             moments,
             rigid,
             solids: Solids::of(model),
+            pool,
         }
     }
 
@@ -175,6 +181,12 @@ impl LagrangianGraph {
     /// Whether body `i` is rigid.
     pub fn is_rigid(&self, i: usize) -> bool {
         self.rigid[i]
+    }
+
+    /// The threads a pass over the bodies (a kick, a drift) spreads over: the run's, from
+    /// `SPREAD_FROM` bodies (below, waking them costs more than the pass).
+    pub fn spread(&self) -> Option<&rayon::ThreadPool> {
+        self.pool.as_deref().filter(|_| self.masses.len() >= SPREAD_FROM)
     }
 
     /// x += h·v.

@@ -11,6 +11,7 @@ pub mod forces;
 pub mod graph;
 pub mod lanes;
 pub mod neighbours;
+pub mod pieces;
 pub mod rigid;
 pub mod setup;
 pub mod solvers;

@@ -14,10 +14,16 @@
 //! Everything here depends on the positions alone, never on the number of threads.
 
 use crate::lanes::{norm2, F64x4, Lane};
+use crate::pieces::Pieces;
+use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
+
+/// Bodies from which the passes over them spread over the pool's threads, a thread taking
+/// `BLOCK` at once (below, waking them costs more than the pass).
+const SPREAD_FROM: usize = 4 * BLOCK;
 
 /// The skin as a fraction of the reach (LAMMPS's 0.3 for a 2.5 cutoff).
 const SKIN: f64 = 0.12;
@@ -76,6 +82,10 @@ pub struct Neighbours {
     /// An empty slot sits far from every body and every other slot (`far`), so that the cutoff
     /// leaves it out with no mask of its own.
     pub x: Vec<Cluster>,
+    /// Each body's slot (the inverse of `bodies`).
+    pub slot: Vec<u32>,
+    /// The i-clusters cut into pieces for the threads (`pieces`), with the list.
+    pub pieces: Pieces,
     pub builds: u64,
 }
 
@@ -106,6 +116,8 @@ impl Neighbours {
             at: vec![],
             offset: vec![],
             x: vec![],
+            slot: vec![],
+            pieces: Pieces::default(),
             builds: 0,
         })
     }
@@ -126,26 +138,51 @@ impl Neighbours {
         // come within reach only if its two bodies together moved more than the skin, so the
         // two largest displacements decide (less often than "one body moved half the skin",
         // and as exact). The 1e-9 keeps the test on the safe side of rounding.
-        let (mut first, mut second) = (0.0f64, 0.0f64);
-        for (p, q) in x.iter().zip(&self.at) {
-            let d2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+        let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
+        let top_two = |(first, second): (f64, f64), d2: f64| {
             if d2 > second {
-                (first, second) = if d2 > first { (d2, first) } else { (first, d2) };
+                if d2 > first {
+                    (d2, first)
+                } else {
+                    (first, d2)
+                }
+            } else {
+                (first, second)
             }
-        }
+        };
+        let moved =
+            |(p, q): (&[f64; 3], &[f64; 3])| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+        // (the two largest of a set are the same whichever way it is split)
+        let (first, second) = match spread {
+            Some(pool) => pool.install(|| {
+                x.par_iter()
+                    .zip(&self.at)
+                    .with_min_len(BLOCK)
+                    .fold(|| (0.0, 0.0), |t, pq| top_two(t, moved(pq)))
+                    .reduce(|| (0.0, 0.0), |a, b| top_two(top_two(a, b.0), b.1))
+            }),
+            None => x.iter().zip(&self.at).fold((0.0, 0.0), |t, pq| top_two(t, moved(pq))),
+        };
         if self.at.len() != x.len() || !(first.sqrt() + second.sqrt() < self.skin * (1.0 - 1e-9)) {
             self.build(x, cell, pool);
         }
-        for (c, cluster) in self.x.iter_mut().enumerate() {
+        let (bodies, offset) = (&self.bodies, &self.offset);
+        let gather = |(c, cluster): (usize, &mut Cluster)| {
             let mut lanes = cluster.map(F64x4::to_array);
             for (lane, slot) in (LANES * c..LANES * (c + 1)).enumerate() {
-                let b = self.bodies[slot];
+                let b = bodies[slot];
                 if b != EMPTY {
-                    let (p, o) = (x[b as usize], self.offset[slot]);
+                    let (p, o) = (x[b as usize], offset[slot]);
                     (0..3).for_each(|k| lanes[k][lane] = p[k] - o[k]);
                 }
             }
             *cluster = lanes.map(F64x4::new);
+        };
+        match spread {
+            Some(pool) => {
+                pool.install(|| self.x.par_iter_mut().enumerate().with_min_len(BLOCK / LANES).for_each(gather))
+            }
+            None => self.x.iter_mut().enumerate().for_each(gather),
         }
     }
 
@@ -207,6 +244,14 @@ impl Neighbours {
             self.pairs.extend_from_slice(&p);
         }
         self.start.push(self.pairs.len());
+        self.slot = vec![EMPTY; x.len()];
+        for (slot, &b) in self.bodies.iter().enumerate() {
+            if b != EMPTY {
+                self.slot[b as usize] = slot as u32;
+            }
+        }
+        let pairs = &self.pairs;
+        self.pieces = Pieces::cut(&self.start, |p| pairs[p].j(), pool);
         self.builds += 1;
     }
 

@@ -4,6 +4,8 @@
 //! solvers all build on it, and it on nothing of theirs.
 
 use crate::state::State;
+use rayon::prelude::*;
+use rayon::ThreadPool;
 
 /// v += h·F/m, with `inverse` the 1/m of each body.
 pub fn kick(v: &mut [[f64; 3]], f: &[[f64; 3]], inverse: &[f64], h: f64) {
@@ -26,7 +28,8 @@ pub fn drift(x: &mut [[f64; 3]], v: &[[f64; 3]], h: f64) {
 
 /// One pass over the bodies: v += h·F/m (twice with `closing`: the closing kick of a step, then
 /// the opening kick of the next, with the same forces), then x += dt·v; and the forces, spent,
-/// are zeroed for the next evaluation to add to (no pass of their own).
+/// are zeroed for the next evaluation to add to (no pass of their own). With `spread`, in
+/// blocks of bodies on its threads: each body's arithmetic is its own, so the same bits.
 pub fn kick_drift(
     x: &mut [[f64; 3]],
     v: &mut [[f64; 3]],
@@ -34,8 +37,9 @@ pub fn kick_drift(
     inverse: &[f64],
     (h, dt): (f64, f64),
     closing: bool,
+    spread: Option<&ThreadPool>,
 ) {
-    for (((x, v), f), w) in x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse) {
+    let one = |(((x, v), f), w): (((&mut [f64; 3], &mut [f64; 3]), &mut [f64; 3]), &f64)| {
         let s = h * w;
         for c in 0..3 {
             if closing {
@@ -45,8 +49,18 @@ pub fn kick_drift(
             x[c] += dt * v[c];
         }
         *f = [0.0; 3];
+    };
+    match spread {
+        Some(pool) => pool.install(|| {
+            let bodies = x.par_iter_mut().zip(v.par_iter_mut()).zip(f.par_iter_mut()).zip(inverse.par_iter());
+            bodies.with_min_len(BLOCK).for_each(one)
+        }),
+        None => x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one),
     }
 }
+
+/// Bodies a thread takes at once in a spread pass over them.
+pub const BLOCK: usize = 4096;
 
 /// The step counter and the clock after one step.
 pub fn tick(s: &mut State, dt: f64) {
@@ -69,6 +83,8 @@ pub struct Stride<'a> {
     pub h: f64,
     pub dt: f64,
     pub until: u64,
+    /// The threads a pass over the bodies spreads over, if the system is big enough.
+    pub spread: Option<&'a ThreadPool>,
 }
 
 impl Stride<'_> {
@@ -83,7 +99,7 @@ impl Stride<'_> {
                 done = Err(e);
                 break;
             }
-            kick_drift(&mut self.s.x, &mut self.s.v, self.f, self.inverse, (self.h, self.dt), true);
+            kick_drift(&mut self.s.x, &mut self.s.v, self.f, self.inverse, (self.h, self.dt), true, self.spread);
             step += 1;
         }
         set_step(self.s, step, self.dt);
@@ -102,8 +118,28 @@ mod tests {
         kick(&mut v2, &f, &[0.5], 0.1);
         kick(&mut v2, &f, &[0.5], 0.1);
         drift(&mut x2, &v2, 0.2);
-        kick_drift(&mut x, &mut v, &mut f, &[0.5], (0.1, 0.2), true);
+        kick_drift(&mut x, &mut v, &mut f, &[0.5], (0.1, 0.2), true, None);
         assert_eq!((x, v, f), (x2, v2, vec![[0.0; 3]]));
+    }
+
+    /// Spread over threads, a pass over the bodies gives the same bits as on one.
+    #[test]
+    fn a_spread_pass_is_the_same_bits() {
+        let n = 3 * BLOCK + 17;
+        let at = |k: usize, c: usize| ((k * 7919 + c * 104_729) % 1000) as f64 / 37.0 - 13.0;
+        let start: Vec<[f64; 3]> = (0..n).map(|k| [at(k, 0), at(k, 1), at(k, 2)]).collect();
+        let inverse: Vec<f64> = (0..n).map(|k| 1.0 / (1.0 + at(k, 3).abs())).collect();
+        let pass = |spread: Option<&ThreadPool>| {
+            let (mut x, mut v, mut f) =
+                (start.clone(), start.iter().map(|p| p.map(|c| 0.1 * c)).collect::<Vec<_>>(), start.clone());
+            kick_drift(&mut x, &mut v, &mut f, &inverse, (0.013, 0.026), true, spread);
+            (
+                x.concat().iter().map(|c| c.to_bits()).collect::<Vec<_>>(),
+                v.concat().iter().map(|c| c.to_bits()).collect::<Vec<_>>(),
+            )
+        };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        assert!(pass(None) == pass(Some(&pool)));
     }
 
     #[test]

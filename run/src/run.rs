@@ -103,6 +103,28 @@ pub struct Watch<'a> {
     pub see: &'a mut dyn FnMut(&State),
 }
 
+/// The most threads a run may ask for: past this a pool is only oversubscribed.
+pub const MOST_THREADS: usize = 1024;
+
+/// Bodies from which a run without `--threads` uses every core: below, one thread is as fast
+/// (the pieces of `lagra_kernel::pieces` pay from tens of thousands of bodies).
+pub const AUTO_FROM: usize = 16_384;
+
+/// The threads a run uses: `asked`, checked, or by default the physical cores this process may
+/// use for a scene of `AUTO_FROM` bodies or more, one below. Any count gives the same bits.
+pub fn threads_for(bodies: usize, asked: Option<usize>) -> Result<usize, String> {
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match asked {
+        Some(0) => Err("--threads must be at least 1".into()),
+        Some(n) if n > MOST_THREADS => {
+            Err(format!("--threads {n} is more than the {MOST_THREADS} a run may use (this machine has {cpus} CPUs)"))
+        }
+        Some(n) => Ok(n),
+        None if bodies >= AUTO_FROM => Ok(num_cpus::get_physical().clamp(1, cpus)),
+        None => Ok(1),
+    }
+}
+
 /// Runs a scene. Errors are setup errors (a model the checker rejects, trace I/O).
 pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);

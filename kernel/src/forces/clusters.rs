@@ -44,22 +44,24 @@ pub fn traits<T: Paired>(l: &Neighbours, s: &Frame) -> Vec<Traits> {
         .collect()
 }
 
-/// Row `row`'s forces over the i-clusters `range` added to `f` (by cluster), and its energy if
-/// `ENERGY`: plain within an i-cluster's pairs, compensated across clusters. Where the CPU has
+/// Row `row`'s forces over the i-clusters `range` added to `f`, a piece's buffer (i-cluster
+/// `ic` at `ic - range.start`, listed pair q's j-cluster at `place[q]`: `pieces`), and its
+/// energy if `ENERGY`: plain within an i-cluster's pairs, compensated across clusters. Where the CPU has
 /// AVX-512 (detected at run time), the same code compiled for it (`wide_registers`).
 pub fn kernel<T: Paired, const ENERGY: bool>(
     l: &Neighbours,
     row: &T::Row,
     traits: &[Traits],
     range: Range<usize>,
+    place: &[u32],
     f: &mut [Cluster],
 ) -> Sum {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx512vl") {
         // SAFETY: the CPU has the features `wide_registers` is compiled for, checked just above.
-        return unsafe { wide_registers::<T, ENERGY>(l, row, traits, range, f) };
+        return unsafe { wide_registers::<T, ENERGY>(l, row, traits, range, place, f) };
     }
-    portable::<T, ENERGY>(l, row, traits, range, f)
+    portable::<T, ENERGY>(l, row, traits, range, place, f)
 }
 
 /// `portable` compiled for AVX-512: its vectors stay 256 bits wide (the same instructions on
@@ -77,9 +79,10 @@ fn wide_registers<T: Paired, const ENERGY: bool>(
     row: &T::Row,
     traits: &[Traits],
     range: Range<usize>,
+    place: &[u32],
     f: &mut [Cluster],
 ) -> Sum {
-    portable::<T, ENERGY>(l, row, traits, range, f)
+    portable::<T, ENERGY>(l, row, traits, range, place, f)
 }
 
 #[inline(always)]
@@ -88,25 +91,29 @@ fn portable<T: Paired, const ENERGY: bool>(
     row: &T::Row,
     traits: &[Traits],
     range: Range<usize>,
+    place: &[u32],
     f: &mut [Cluster],
 ) -> Sum {
     let zero = F64x4::splat(0.0);
     let mut energy = Sum::default();
+    let base = range.start;
     for ic in range {
         let mut fi = [[zero; 3]; LANES];
         let mut e = zero;
-        for p in &l.pairs[l.start[ic]..l.start[ic + 1]] {
+        let listed = l.start[ic]..l.start[ic + 1];
+        for (p, &at) in l.pairs[listed.clone()].iter().zip(&place[listed]) {
             let jc = p.j();
+            let fj = &mut f[at as usize];
             // a cluster with itself at the zero image: each pair once, the lower triangle masked
             // (a separate instance, so that every other pair goes without the mask)
             if jc == ic && p.image() == CENTRE {
-                rows::<T, ENERGY, true>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, f);
+                rows::<T, ENERGY, true>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, fj);
             } else {
-                rows::<T, ENERGY, false>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, f);
+                rows::<T, ENERGY, false>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, fj);
             }
         }
         for c in 0..3 {
-            f[ic][c] = f[ic][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
+            f[ic - base][c] = f[ic - base][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
         }
         if ENERGY {
             energy.add(e.sum());
@@ -116,7 +123,7 @@ fn portable<T: Paired, const ENERGY: bool>(
 }
 
 /// One cluster pair's sixteen body pairs, as four rows: body a of the i-cluster against the
-/// j-cluster's four lanes; its forces into `fi` and `f[jc]`, its energy into `e`.
+/// j-cluster's four lanes; its forces into `fi` and `fj`, its energy into `e`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
@@ -126,7 +133,7 @@ fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
     (ic, jc, image): (usize, usize, usize),
     fi: &mut [[F64x4; 3]; LANES],
     e: &mut F64x4,
-    f: &mut [Cluster],
+    fj_out: &mut Cluster,
 ) {
     let rc2 = F64x4::splat(T::reach2(row));
     let (xi, xj, sh) = (&l.x[ic], &l.x[jc], &l.shifts[image]);
@@ -152,7 +159,7 @@ fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
         }
     }
     for c in 0..3 {
-        f[jc][c] = f[jc][c] + fj[c];
+        fj_out[c] = fj_out[c] + fj[c];
     }
 }
 
@@ -176,6 +183,11 @@ mod tests {
     use super::*;
     use crate::forces::dual::Rng;
     use lagra_checker::model::Cell;
+
+    /// The whole list as one piece: each pair's j-cluster at its own index.
+    fn whole(l: &Neighbours) -> Vec<u32> {
+        l.pairs.iter().map(|p| p.j() as u32).collect()
+    }
 
     /// Lane k of the four-lane formula is the scalar formula at lane k's r², bit for bit, for
     /// every pair term.
@@ -235,7 +247,7 @@ mod tests {
         let p = [1.0, 1.0, 2.5];
         let row = lennard_jones::Shifted::row(&p);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        let e = kernel::<lennard_jones::Shifted, true>(&l, &row, &[], 0..l.clusters(), &mut f).value();
+        let e = kernel::<lennard_jones::Shifted, true>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f).value();
         let (mut scalar, mut size, mut es) = (vec![[0.0; 3]; x.len()], vec![0.0; x.len()], 0.0);
         l.each_pair::<()>(|i, j, d| {
             let (a, v) = lennard_jones::Shifted::eval(&row, d, [0.0; 4], 0.0).unwrap();
@@ -287,8 +299,8 @@ mod tests {
             let mut f = vec![[F64x4::default(); 3]; l.clusters()];
             let e = match wide {
                 // SAFETY: the CPU has AVX-512VL (the test returned above otherwise)
-                true => unsafe { wide_registers::<T, true>(l, &row, traits, 0..l.clusters(), &mut f) },
-                false => portable::<T, true>(l, &row, traits, 0..l.clusters(), &mut f),
+                true => unsafe { wide_registers::<T, true>(l, &row, traits, 0..l.clusters(), &whole(l), &mut f) },
+                false => portable::<T, true>(l, &row, traits, 0..l.clusters(), &whole(l), &mut f),
             };
             (f.iter().flatten().flat_map(|c| c.to_array()).map(f64::to_bits).collect(), e.value().to_bits())
         }
@@ -310,12 +322,12 @@ mod tests {
         l.update(&x, &cell, None);
         let row = lennard_jones::Plain::row(&[1.0, 1.0, 2.5]);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &mut f);
+        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f);
         assert!(f.iter().flatten().any(|c| c.to_array().iter().any(|v| !v.is_finite())));
         x[17][0] += 0.9;
         l.update(&x, &cell, None);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &mut f);
+        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f);
         assert!(f.iter().flatten().all(|c| c.to_array().iter().all(|v| v.is_finite())));
     }
 }

@@ -1,5 +1,6 @@
-//! Pair terms: over all pairs of a few bodies, or over a Verlet list of clusters, split by
-//! body into a fixed number of chunks so the sums are the same bits on any number of threads.
+//! Pair terms: over all pairs of a few bodies, or over a Verlet list of clusters cut into
+//! pieces by the system's size (`pieces`), so the sums are the same bits on any number of
+//! threads.
 
 use super::clusters;
 use super::derivative::{coincident, Adjoint, Direction, PairDerivative, Wanted};
@@ -7,7 +8,7 @@ use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
-use crate::step::Stride;
+use crate::step::{Stride, BLOCK};
 use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
@@ -31,18 +32,21 @@ pub struct Pairs<T: Paired> {
     /// For a finite reach on enough bodies in a big enough box: the Verlet list, kept between
     /// steps (a lock, since forces are evaluated through a shared reference).
     list: Option<Mutex<Neighbours>>,
+    /// The pieces' buffers and their sums by cluster, kept between steps (fresh ones would be
+    /// fresh pages each step).
+    output: Mutex<Output>,
     pool: Pool,
     term: PhantomData<T>,
 }
 
+#[derive(Default)]
+struct Output {
+    buffers: Vec<Vec<Cluster>>,
+    summed: Vec<Cluster>,
+}
+
 /// Below this many bodies a pair term loops over every pair: as fast, and nothing to keep.
 const LIST_FROM: usize = 64;
-
-/// From this many bodies the listed pairs are split into `CHUNKS` parts by body, each summing
-/// its forces into its own buffer, the buffers then added in order: the same bits for any number
-/// of threads, since the split depends on the list alone.
-const SPLIT_FROM: usize = 4096;
-const CHUNKS: usize = 4;
 
 impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -> Box<dyn Force> {
@@ -61,6 +65,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             cell: m.cell,
             reach,
             list,
+            output: Mutex::default(),
             pool: pool.clone(),
             term: PhantomData,
         })
@@ -84,51 +89,57 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         Ok(w.value())
     }
 
-    /// Through the cluster-pair list (`clusters::kernel`), the i-clusters split into chunks of
-    /// about equal pair counts, each summing into its own buffer; the buffers are added in order
-    /// and then given back to the bodies. The split depends on the list alone: the same bits on
+    /// Through the cluster-pair list (`clusters::kernel`), piece by piece (`pieces`): each piece
+    /// sums into a buffer of its own clusters and halo, each cluster's parts are added in piece
+    /// order and given back to its bodies. The cut depends on the list alone: the same bits on
     /// any number of threads.
     fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
-        let n = l.clusters();
-        let chunks = if s.x.len() >= SPLIT_FROM { CHUNKS } else { 1 };
-        let total = l.count();
-        let bounds: Vec<usize> = (0..=chunks)
-            .map(|c| if c == chunks { n } else { l.start.partition_point(|&k| k < total * c / chunks) })
-            .collect();
+        let pieces = &l.pieces;
         let traits = clusters::traits::<T>(l, s);
-        let mut buffers = vec![vec![[F64x4::default(); 3]; n]; chunks];
         // (two bodies at one point make the forces non-finite: `accumulate` then names them)
-        let work = |(c, buffer): (usize, &mut Vec<Cluster>)| {
+        let work = |(k, buffer): (usize, &mut Vec<Cluster>)| {
+            buffer.clear();
+            buffer.resize(pieces.size(k), [F64x4::default(); 3]);
             let mut sum = Sum::default();
             for row in &self.rows {
-                let range = bounds[c]..bounds[c + 1];
                 sum.merge(match energy {
-                    true => clusters::kernel::<T, true>(l, row, &traits, range, buffer),
-                    false => clusters::kernel::<T, false>(l, row, &traits, range, buffer),
+                    true => clusters::kernel::<T, true>(l, row, &traits, pieces.own(k), &pieces.place, buffer),
+                    false => clusters::kernel::<T, false>(l, row, &traits, pieces.own(k), &pieces.place, buffer),
                 });
             }
             sum
         };
-        let sums: Vec<Sum> = match &self.pool {
-            Some(pool) if chunks > 1 => pool.install(|| buffers.par_iter_mut().enumerate().map(work).collect()),
-            _ => buffers.iter_mut().enumerate().map(work).collect(),
+        let add = |a: Cluster, b: Cluster| -> Cluster { std::array::from_fn(|c| a[c] + b[c]) };
+        let give_back = |(b, fb): (usize, &mut [f64; 3]), summed: &[Cluster]| {
+            let slot = l.slot[b] as usize;
+            if slot != EMPTY as usize {
+                for c in 0..3 {
+                    fb[c] += summed[slot / LANES][c].lane(slot % LANES);
+                }
+            }
         };
-        let (first, rest) = buffers.split_first_mut().expect("one chunk at least");
-        for b in rest {
-            for (fi, bi) in first.iter_mut().zip(b.iter()) {
-                for c in 0..3 {
-                    fi[c] = fi[c] + bi[c];
-                }
+        let mut output = self.output.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let Output { buffers, summed } = &mut *output;
+        buffers.resize_with(pieces.count(), Vec::new);
+        summed.resize(l.clusters(), [F64x4::default(); 3]);
+        let sums: Vec<Sum> = match &self.pool {
+            Some(pool) if pieces.count() > 1 => pool.install(|| {
+                let sums = buffers.par_iter_mut().enumerate().map(work).collect();
+                summed
+                    .par_iter_mut()
+                    .enumerate()
+                    .with_min_len(256)
+                    .for_each(|(c, s)| *s = pieces.gather(c, buffers, add));
+                f.par_iter_mut().enumerate().with_min_len(1024).for_each(|bf| give_back(bf, summed));
+                sums
+            }),
+            _ => {
+                let sums = buffers.iter_mut().enumerate().map(work).collect();
+                summed.iter_mut().enumerate().for_each(|(c, s)| *s = pieces.gather(c, buffers, add));
+                f.iter_mut().enumerate().for_each(|bf| give_back(bf, summed));
+                sums
             }
-        }
-        for (slot, &b) in l.bodies.iter().enumerate() {
-            if b != EMPTY {
-                let cluster = &first[slot / LANES];
-                for c in 0..3 {
-                    f[b as usize][c] += cluster[c].lane(slot % LANES);
-                }
-            }
-        }
+        };
         let mut energy = Sum::default();
         for part in sums {
             energy.merge(part);
@@ -279,7 +290,12 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         l.update(s.x, &self.cell, self.pool.as_deref());
         let energy = self.through_list(&l, s, f, energy)?;
-        if energy.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
+        let finite = |b: &[f64; 3]| b.iter().all(|c| c.is_finite());
+        let all_finite = match self.pool.as_ref().filter(|_| f.len() >= 4 * BLOCK) {
+            Some(pool) => pool.install(|| f.par_iter().with_min_len(BLOCK).all(finite)),
+            None => f.iter().all(finite),
+        };
+        if energy.is_finite() && all_finite {
             return Ok(energy);
         }
         // Rare: find the pair that overflowed, by the checked traversal.
@@ -317,12 +333,13 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
                 let l = l.lock().unwrap_or_else(|p| p.into_inner());
                 let threads = self.pool.as_ref().map_or(1, |p| p.current_num_threads());
                 format!(
-                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} on {threads} thread(s)",
+                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} piece(s) by size (halos: {:.2} buffer places a cluster) on {threads} thread(s)",
                     l.skin,
                     l.builds,
                     l.count(),
                     l.clusters(),
-                    if l.bodies.len() >= SPLIT_FROM { format!("{CHUNKS} fixed chunks") } else { "one chunk".into() }
+                    l.pieces.count(),
+                    l.pieces.spread(),
                 )
             }
         }

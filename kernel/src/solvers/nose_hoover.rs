@@ -44,7 +44,7 @@ impl Solver for NoseHoover {
         let (h, at) = (0.5 * dt, &mut self.vv.at);
         while s.step < until {
             nose_hoover_half(&self.chain, s, &g.masses, h);
-            kick_drift(&mut s.x, &mut s.v, &mut at.f, &g.inverse_masses, (h, dt), false);
+            kick_drift(&mut s.x, &mut s.v, &mut at.f, &g.inverse_masses, (h, dt), false, g.spread());
             if s.step + 1 == until {
                 at.potential = g.forces(s, &mut at.f)?;
             } else {

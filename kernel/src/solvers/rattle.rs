@@ -31,7 +31,7 @@ impl Solver for Rattle {
     fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
         let (h, tol) = (0.5 * dt, self.tol);
         let before = s.x.clone();
-        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false);
+        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false, g.spread());
         let shaken = g.shake(&before, s, dt, tol)?;
         let mut sweeps = shaken.sweeps;
         if g.velocity_dependent() {

@@ -19,7 +19,7 @@ pub struct VelocityVerlet {
 impl Solver for VelocityVerlet {
     fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
         let h = 0.5 * dt;
-        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false);
+        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false, g.spread());
         if g.velocity_dependent() {
             implicit_kick(g, s, &mut self.at, h, |_| Ok(()))
         } else {
@@ -54,9 +54,9 @@ impl Solver for VelocityVerlet {
             return Ok(());
         }
         let h = 0.5 * dt;
-        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false);
+        kick_drift(&mut s.x, &mut s.v, &mut self.at.f, &g.inverse_masses, (h, dt), false, g.spread());
         // forces only: the force loops refuse a non-finite force, so no NaN passes unseen
-        g.stride(Stride { s, f: &mut self.at.f, inverse: &g.inverse_masses, h, dt, until })?;
+        g.stride(Stride { s, f: &mut self.at.f, inverse: &g.inverse_masses, h, dt, until, spread: g.spread() })?;
         self.at.potential = g.forces(s, &mut self.at.f)?;
         g.kick(&mut s.v, &self.at.f, h);
         tick(s, dt);
