@@ -55,6 +55,9 @@ enum Study {
         /// Only the 256-atom liquid (a smoke run).
         #[arg(long)]
         quick: bool,
+        /// Threads for both the forward run and the gradient (the same bits on any count).
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
         #[arg(long)]
         json: bool,
     },
@@ -329,7 +332,7 @@ pub fn main(a: Args) -> ExitCode {
     let result = match a.study {
         Study::Precision { out, quick } => precision(&out, quick),
         Study::Overhead { steps, repeats, json } => overhead(steps, repeats, json),
-        Study::Gradient { repeats, quick, json } => gradient_cost(repeats, quick, json),
+        Study::Gradient { repeats, quick, threads, json } => gradient_cost(repeats, quick, threads, json),
         Study::Validation { dir, out, only, quick, json } => {
             crate::validation::study(&dir, out.as_deref(), only.as_deref(), quick, json)
         }
@@ -419,7 +422,8 @@ struct GradientCost {
     state_bytes: usize,
 }
 
-fn gradient_cost(repeats: u32, quick: bool, json: bool) -> Result<String, String> {
+fn gradient_cost(repeats: u32, quick: bool, threads: usize, json: bool) -> Result<String, String> {
+    let threads = lagra_run::run::threads_for(0, Some(threads))?;
     use lagra_lang::params;
     use lagra_run::grad::{gradient, objective_value, Method, Objective, Request};
     let root = env!("CARGO_MANIFEST_DIR");
@@ -437,11 +441,11 @@ fn gradient_cost(repeats: u32, quick: bool, json: bool) -> Result<String, String
         let (mut forward, mut reverse, mut kept) = (f64::INFINITY, f64::INFINITY, 0);
         for _ in 0..repeats.max(1) {
             let t = Instant::now();
-            std::hint::black_box(objective_value(&scene, &objective, 1)?);
+            std::hint::black_box(objective_value(&scene, &objective, threads)?);
             forward = forward.min(t.elapsed().as_secs_f64());
             let t = Instant::now();
             let g = gradient(
-                Request { scene: &scene, objective: &objective, wrt: &wrt, threads: 1, progress: None },
+                Request { scene: &scene, objective: &objective, wrt: &wrt, threads, progress: None },
                 Method::Reverse,
             )?;
             reverse = reverse.min(t.elapsed().as_secs_f64());

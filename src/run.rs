@@ -12,7 +12,7 @@ use lagra_lang::scene::Scene;
 use lagra_noether::Analysis;
 use lagra_run::compile;
 use lagra_run::run::{run, Options, Report};
-use lagra_run::trace::{Format, Frames, Writer};
+use lagra_run::trace::{Behind, Format, Frames, Writer};
 use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -171,7 +171,7 @@ pub fn main(a: Args) -> ExitCode {
     };
     let mut file = match a.trace.as_ref().zip(format) {
         Some((p, format)) => match File::create(p) {
-            Ok(f) => Some(Writer { out: BufWriter::new(f), format, cell: scene.model.cell }),
+            Ok(f) => Some(Behind::new(Writer { out: BufWriter::new(f), format, cell: scene.model.cell })),
             Err(e) => return bad(format!("cannot create the trace file: {e}")),
         },
         None => None,
@@ -209,7 +209,8 @@ pub fn main(a: Args) -> ExitCode {
         },
     );
     progress.iter().for_each(Progress::done);
-    let flushed = file.as_mut().map(|w| w.out.flush()).transpose();
+    drop(both);
+    let flushed = file.map(|w| w.finish().and_then(|mut w| w.out.flush())).transpose();
     let rep = match (result, flushed) {
         (Ok(r), Ok(_)) => r,
         (Err(e), _) => return bad(e),

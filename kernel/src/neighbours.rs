@@ -187,38 +187,34 @@ impl Neighbours {
     }
 
     fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
+        let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
         self.at.clear();
         self.at.extend_from_slice(x);
-        let offset: Vec<[f64; 3]> = x
-            .iter()
-            .map(|p| match cell {
-                None => [0.0; 3],
-                Some(c) => {
-                    std::array::from_fn(|a| if c.periodic[a] { c.size[a] * (p[a] / c.size[a]).floor() } else { 0.0 })
-                }
-            })
-            .collect();
-        let wrapped: Vec<[f64; 3]> =
-            x.iter().zip(&offset).map(|(p, o)| [p[0] - o[0], p[1] - o[1], p[2] - o[2]]).collect();
+        let offset: Vec<[f64; 3]> = each(spread, x.len(), |i| match cell {
+            None => [0.0; 3],
+            Some(c) => {
+                std::array::from_fn(|a| if c.periodic[a] { c.size[a] * (x[i][a] / c.size[a]).floor() } else { 0.0 })
+            }
+        });
+        let wrapped: Vec<[f64; 3]> = each(spread, x.len(), |i| std::array::from_fn(|a| x[i][a] - offset[i][a]));
         let columns = Columns::new(&wrapped, cell);
-        let (slots, first) = columns.clusters(&wrapped);
+        let (slots, first) = columns.clusters(&wrapped, spread);
         self.bodies = slots;
-        self.offset = self.bodies.iter().map(|&b| if b == EMPTY { [0.0; 3] } else { offset[b as usize] }).collect();
-        let far = far(&wrapped, self.reach + self.skin);
-        self.x = (0..self.bodies.len() / LANES)
-            .map(|c| {
-                let at = |slot: usize| match self.bodies[slot] {
-                    EMPTY => far(slot),
-                    b => wrapped[b as usize],
-                };
-                std::array::from_fn(|k| F64x4::new(std::array::from_fn(|l| at(LANES * c + l)[k])))
-            })
-            .collect();
-        let boxes: Vec<Bounds> = self
-            .bodies
-            .chunks(LANES)
-            .map(|s| Bounds::of(s.iter().filter(|&&b| b != EMPTY).map(|&b| &wrapped[b as usize])))
-            .collect();
+        let bodies = &self.bodies;
+        self.offset =
+            each(spread, bodies.len(), |s| if bodies[s] == EMPTY { [0.0; 3] } else { offset[bodies[s] as usize] });
+        let far = far(&wrapped, self.reach + self.skin, spread);
+        self.x = each(spread, bodies.len() / LANES, |c| {
+            let at = |slot: usize| match bodies[slot] {
+                EMPTY => far(slot),
+                b => wrapped[b as usize],
+            };
+            std::array::from_fn(|k| F64x4::new(std::array::from_fn(|l| at(LANES * c + l)[k])))
+        });
+        let boxes: Vec<Bounds> = each(spread, bodies.len() / LANES, |c| {
+            let slots = &bodies[LANES * c..LANES * (c + 1)];
+            Bounds::of(slots.iter().filter(|&&b| b != EMPTY).map(|&b| &wrapped[b as usize]))
+        });
         let search = Search {
             columns: &columns,
             first: &first,
@@ -230,9 +226,10 @@ impl Neighbours {
         let n = boxes.len();
         self.start.clear();
         self.pairs.clear();
-        // in as many parts as there are threads, each listed on its own and joined in order: the
-        // same list as one pass makes
-        let parts = pool.map_or(1, |p| p.current_num_threads());
+        // in parts, each listed on its own and joined in order: the same list as one pass makes;
+        // as many as there are threads, or one per 1,024 clusters if more, so that a thread
+        // done early takes another
+        let parts = pool.map_or(1, |p| p.current_num_threads().max(n / 1024));
         let ranges: Vec<Range<usize>> = (0..parts).map(|k| n * k / parts..n * (k + 1) / parts).collect();
         let listed: Vec<(Vec<usize>, Vec<Pair>)> = match pool {
             Some(p) if parts > 1 => p.install(|| ranges.into_par_iter().map(|r| search.part(r)).collect()),
@@ -282,11 +279,26 @@ impl Neighbours {
     }
 }
 
+/// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
+/// own: the same values either way).
+fn each<U: Send>(spread: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
+    match spread {
+        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
+        None => (0..n).map(f).collect(),
+    }
+}
+
 /// Where empty slots sit: 10 r beyond the farthest coordinate of any body, 4 r apart along x,
 /// so that no body and no other empty slot is within r of one, the bodies' moves between builds
 /// (less than the skin) included, and no distance to one squares into a subnormal's range.
-fn far(w: &[[f64; 3]], r: f64) -> impl Fn(usize) -> [f64; 3] {
-    let base = w.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs())) + 10.0 * r + 1.0;
+fn far(w: &[[f64; 3]], r: f64, spread: Option<&ThreadPool>) -> impl Fn(usize) -> [f64; 3] {
+    let largest = |p: &[f64; 3]| p.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    // (the largest of a set is the same however it is split)
+    let base = match spread {
+        Some(pool) => pool.install(|| w.par_iter().with_min_len(BLOCK).map(largest).reduce(|| 0.0, f64::max)),
+        None => w.iter().map(largest).fold(0.0, f64::max),
+    } + 10.0 * r
+        + 1.0;
     move |slot| [base + 4.0 * r * slot as f64, base, base]
 }
 
@@ -349,9 +361,9 @@ impl Columns {
 
     /// The bodies by slot, columns in order, each column's sorted by z and cut into clusters;
     /// and each column's first cluster (one more entry, the total, at the end).
-    fn clusters(&self, w: &[[f64; 3]]) -> (Vec<u32>, Vec<usize>) {
+    fn clusters(&self, w: &[[f64; 3]], spread: Option<&ThreadPool>) -> (Vec<u32>, Vec<usize>) {
         let columns = self.n[0] * self.n[1];
-        let column: Vec<usize> = w.iter().map(|p| self.index(0, p[0]) + self.n[0] * self.index(1, p[1])).collect();
+        let column: Vec<usize> = each(spread, w.len(), |i| self.index(0, w[i][0]) + self.n[0] * self.index(1, w[i][1]));
         let mut count = vec![0usize; columns + 1];
         column.iter().for_each(|&c| count[c + 1] += 1);
         for c in 0..columns {
@@ -363,10 +375,25 @@ impl Columns {
             order[next[c]] = i as u32;
             next[c] += 1;
         }
+        // each column's run sorted by z (then by body: a total order, so the same runs however
+        // the columns are shared out)
+        let mut runs: Vec<&mut [u32]> = Vec::with_capacity(columns);
+        let mut rest = &mut order[..];
+        for c in 0..columns {
+            let (run, tail) = rest.split_at_mut(count[c + 1] - count[c]);
+            runs.push(run);
+            rest = tail;
+        }
+        let by_z = |run: &mut &mut [u32]| {
+            run.sort_unstable_by(|&a, &b| w[a as usize][2].total_cmp(&w[b as usize][2]).then(a.cmp(&b)))
+        };
+        match spread {
+            Some(pool) => pool.install(|| runs.par_iter_mut().for_each(by_z)),
+            None => runs.iter_mut().for_each(by_z),
+        }
         let (mut slots, mut first) = (Vec::with_capacity(w.len() + LANES * columns), Vec::with_capacity(columns + 1));
         for c in 0..columns {
-            let run = &mut order[count[c]..count[c + 1]];
-            run.sort_unstable_by(|&a, &b| w[a as usize][2].total_cmp(&w[b as usize][2]).then(a.cmp(&b)));
+            let run = &order[count[c]..count[c + 1]];
             first.push(slots.len() / LANES);
             slots.extend_from_slice(run);
             slots.resize(slots.len().next_multiple_of(LANES), EMPTY);
@@ -577,17 +604,21 @@ mod tests {
     #[test]
     fn the_list_is_the_same_on_any_number_of_threads() {
         let mut rng = Rng::new(11);
-        let cell = Some(Cell { size: [16.0; 3], periodic: [true; 3] });
-        let x: Vec<[f64; 3]> = (0..3000).map(|_| std::array::from_fn(|_| rng.uniform(-4.0, 20.0))).collect();
-        let built = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let mut list = Neighbours::new(&cell, 2.5).unwrap();
-            list.update(&x, &cell, (threads > 1).then_some(&pool));
-            (list.bodies, list.start, list.pairs)
-        };
-        let one = built(1);
-        assert!(one.2.len() > 10_000, "{}", one.2.len());
-        assert!(built(2) == one && built(3) == one);
+        // 3,000 bodies (the passes over them on one thread), and 20,000 (spread over the pool)
+        for (n, side) in [(3000, 16.0), (20_000, 30.0)] {
+            let cell = Some(Cell { size: [side; 3], periodic: [true; 3] });
+            let x: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-4.0, side + 4.0))).collect();
+            let built = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let mut list = Neighbours::new(&cell, 2.5).unwrap();
+                list.update(&x, &cell, (threads > 1).then_some(&pool));
+                let x: Vec<_> = list.x.iter().flatten().flat_map(|v| v.to_array().map(f64::to_bits)).collect();
+                (list.bodies, list.start, list.pairs, x, list.offset, list.slot, list.pieces.place)
+            };
+            let one = built(1);
+            assert!(one.2.len() > 3 * n, "{}", one.2.len());
+            assert!(built(2) == one && built(3) == one && built(7) == one);
+        }
     }
 
     /// Clusters are compact, and boxes within reach whose bodies are not are left out: on a

@@ -224,10 +224,8 @@ impl PyScene {
         }
         let steps = at_least_one("steps", steps)?;
         let callback_every = at_least_one("every", callback_every)?.unwrap_or(prepared.scene.solver.steps_per_frame);
-        let threads = threads.unwrap_or(1);
-        if threads == 0 {
-            return Err(PyValueError::new_err("threads must be at least 1"));
-        }
+        let threads = lagra_run::run::threads_for(prepared.scene.model.bodies.len(), threads)
+            .map_err(|e| PyValueError::new_err(e.replacen("--threads", "threads", 1)))?;
         let stop = AtomicBool::new(false);
         let failure: Mutex<Option<PyErr>> = Mutex::new(None);
         let fail = |e: PyErr| {

@@ -8,6 +8,8 @@ use lagra_kernel::state::State;
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
+use std::sync::mpsc::{sync_channel, SyncSender};
+use std::thread::JoinHandle;
 
 /// What a run hands each frame to.
 pub trait Frames {
@@ -102,6 +104,57 @@ impl<W: Write> Frames for Writer<W> {
                     writeln!(w, "{} 1 {} {} {} {} {} {}", i + 1, N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
                 }
                 Ok(())
+            }
+        }
+    }
+}
+
+/// Frames written by a thread of their own, so that formatting them (the shortest digits of
+/// every number: longer than a step on a big system) does not hold up the kernel. The run hands
+/// over a copy of each frame's state; at most two wait, so memory stays that of two states. A
+/// write error ends the writer: the next frame, or `finish`, returns it.
+pub struct Behind<F: Frames + Send + 'static> {
+    to: Option<SyncSender<(State, f64)>>,
+    writer: Option<JoinHandle<(F, io::Result<()>)>>,
+}
+
+impl<F: Frames + Send + 'static> Behind<F> {
+    pub fn new(mut inner: F) -> Behind<F> {
+        let (to, frames) = sync_channel::<(State, f64)>(2);
+        let writer = std::thread::Builder::new().name("lagra-trace".into()).spawn(move || {
+            let written = frames.into_iter().try_for_each(|(s, energy)| inner.frame(&s, energy));
+            (inner, written)
+        });
+        match writer {
+            Ok(w) => Behind { to: Some(to), writer: Some(w) },
+            // no thread to be had: no writer either (`finish` says so)
+            Err(_) => Behind { to: None, writer: None },
+        }
+    }
+
+    /// Waits for every frame to be written; the writer back, and how the writing went.
+    pub fn finish(mut self) -> io::Result<F> {
+        drop(self.to.take());
+        let (inner, written) = self.joined()?;
+        written.map(|_| inner)
+    }
+
+    fn joined(&mut self) -> io::Result<(F, io::Result<()>)> {
+        let thread = self.writer.take().ok_or_else(|| io::Error::other("the trace's writer thread could not start"))?;
+        thread.join().map_err(|_| io::Error::other("the trace's writer thread panicked"))
+    }
+}
+
+impl<F: Frames + Send + 'static> Frames for Behind<F> {
+    fn frame(&mut self, s: &State, energy: f64) -> io::Result<()> {
+        let sent = self.to.as_ref().map(|to| to.send((s.clone(), energy)));
+        match sent {
+            Some(Ok(())) => Ok(()),
+            // the writer stopped on an error: that error
+            _ => {
+                self.to = None;
+                let (_, written) = self.joined()?;
+                written.and(Err(io::Error::other("the trace's writer stopped")))
             }
         }
     }
@@ -210,6 +263,34 @@ mod tests {
         assert!(text.ends_with(
             "ITEM: ATOMS id type xu yu zu vx vy vz\n1 1 0.1 -2.5 1e-300 1 0 -1\n2 1 3 4 5 0.5 0.25 0.125\n"
         ));
+    }
+
+    /// Frames written behind, on the writer's thread, are the bytes written in place.
+    #[test]
+    fn frames_written_behind_are_the_same_bytes() {
+        let mut here = Writer { out: vec![], format: Format::Jsonl, cell: None };
+        let mut behind = Behind::new(Writer { out: vec![], format: Format::Jsonl, cell: None });
+        for k in 0..50 {
+            let s = State { step: k, ..state() };
+            here.frame(&s, k as f64).unwrap();
+            behind.frame(&s, k as f64).unwrap();
+        }
+        assert_eq!(behind.finish().unwrap().out, here.out);
+    }
+
+    /// A writer that fails: its error comes back, at a later frame or at the end.
+    #[test]
+    fn a_failing_writer_behind_says_why() {
+        struct Full;
+        impl Frames for Full {
+            fn frame(&mut self, _: &State, _: f64) -> io::Result<()> {
+                Err(io::Error::other("no space left"))
+            }
+        }
+        let mut behind = Behind::new(Full);
+        let sent: Vec<io::Result<()>> = (0..10).map(|_| behind.frame(&state(), 0.0)).collect();
+        let error = sent.into_iter().find_map(Result::err).or_else(|| behind.finish().err());
+        assert_eq!(error.map(|e| e.to_string()), Some("no space left".into()));
     }
 
     #[test]

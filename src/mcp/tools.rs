@@ -194,8 +194,9 @@ fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &Atom
         Err(e) => return Ok(answer(e, None, true)),
     };
     let steps = positive_integer(args, "steps")?;
-    let threads = positive_integer(args, "threads")?.unwrap_or(1) as usize;
     let scene = &prepared.scene;
+    let threads =
+        lagra_run::run::threads_for(scene.model.bodies.len(), positive_integer(args, "threads")?.map(|n| n as usize))?;
     let planned = steps.unwrap_or(scene.solver.steps);
     let atom_steps = planned as f64 * scene.model.bodies.len() as f64;
     if atom_steps > server.budget {

@@ -163,6 +163,79 @@ fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
     }
 }
 
+/// What one instance's pullback through the cluster list reads: its row and parameters, its
+/// reach², which parameters' adjoints are wanted, and the covector g by cluster (as `Neighbours::x`,
+/// zeros in empty slots).
+pub struct Pulled<'a, R> {
+    pub row: &'a R,
+    pub p: &'a [f64],
+    pub reach2: f64,
+    pub wanted: &'a [usize],
+    pub g: &'a [Cluster],
+}
+
+/// The transpose of the forces' derivatives applied to g, over the i-clusters `range`, four
+/// pairs at a time with the hand-derived jets (`Paired::jet` on `F64x4`): each pair's
+/// w = s·Δg + s_r (Δg·d) d, Δg = gᵢ − gⱼ, added to j and taken from i in `f` (a piece's buffer,
+/// placed as in `kernel`), and ∂s/∂p (Δg·d) to the wanted parameters' sums. Pairs beyond the
+/// reach, empty slots and a cluster's lower triangle with itself are masked, as in `kernel`.
+/// The term's jet must exist (`Pairs::jets_everywhere`).
+pub fn pullback<T: Paired>(
+    l: &Neighbours,
+    at: &Pulled<T::Row>,
+    range: Range<usize>,
+    place: &[u32],
+    f: &mut [Cluster],
+) -> [Sum; 3] {
+    let zero = F64x4::splat(0.0);
+    let reach2 = F64x4::splat(at.reach2);
+    let mut params = [Sum::default(), Sum::default(), Sum::default()];
+    let base = range.start;
+    for ic in range {
+        let mut fi = [[zero; 3]; LANES];
+        let mut dp = [zero; 3];
+        let listed = l.start[ic]..l.start[ic + 1];
+        for (p, &slot) in l.pairs[listed.clone()].iter().zip(&place[listed]) {
+            let (jc, image) = (p.j(), p.image());
+            let (xi, xj, sh, gi, gj) = (&l.x[ic], &l.x[jc], &l.shifts[image], &at.g[ic], &at.g[jc]);
+            let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
+            let mut wj = [zero; 3];
+            for (a, fa) in fi.iter_mut().enumerate() {
+                let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
+                let r2 = norm2(&d);
+                let inside = if jc == ic && image == CENTRE { r2.lt(reach2) & after(a) } else { r2.lt(reach2) };
+                let jet = T::jet(at.row, at.p, r2).expect("a jet for every instance");
+                let (s, s_r) = (inside.and(jet.s), inside.and(jet.s_r));
+                let dg = [
+                    F64x4::splat(gi[0].lane(a)) - gj[0],
+                    F64x4::splat(gi[1].lane(a)) - gj[1],
+                    F64x4::splat(gi[2].lane(a)) - gj[2],
+                ];
+                let along = dg[2].mul_add(d[2], dg[1].mul_add(d[1], dg[0] * d[0]));
+                let sa = s_r * along;
+                for c in 0..3 {
+                    let w = s.mul_add(dg[c], sa * d[c]);
+                    wj[c] = wj[c] + w;
+                    fa[c] = fa[c] - w;
+                }
+                for &w in at.wanted {
+                    dp[w] = inside.and(jet.ds[w]).mul_add(along, dp[w]);
+                }
+            }
+            for c in 0..3 {
+                f[slot as usize][c] = f[slot as usize][c] + wj[c];
+            }
+        }
+        for c in 0..3 {
+            f[ic - base][c] = f[ic - base][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
+        }
+        for &w in at.wanted {
+            params[w].add(dp[w].sum());
+        }
+    }
+    params
+}
+
 /// [mᵢ, mⱼ, qᵢ, qⱼ] and cᵢ·cⱼ for body a of cluster `ic` against cluster `jc`'s four, if the
 /// term reads them (zeros, and no loads, if not).
 #[inline(always)]

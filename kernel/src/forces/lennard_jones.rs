@@ -47,14 +47,16 @@ impl Lj {
 
     /// The plain term's radial derivatives at r² for parameters (ε, σ, ...): with u = (σ/r)⁶,
     /// s = 24ε(u − 2u²)/r², s_r = 96ε(7u² − 2u)/r⁴, ∂s/∂ε = s/ε, ∂s/∂σ = 144ε(u − 4u²)/(σr²).
-    pub(crate) fn jet_at(&self, p: &[f64], r2: f64) -> Jet {
+    #[inline(always)]
+    pub(crate) fn jet_at<L: Lane>(&self, p: &[f64], r2: L) -> Jet<L> {
         let (eps, sigma) = (p[0], p[1]);
-        let inv = 1.0 / r2;
-        let s2 = self.sigma2 * inv;
+        let inv = L::splat(1.0) / r2;
+        let s2 = inv * self.sigma2;
         let u = s2 * s2 * s2;
-        let s = self.eps24 * (u - 2.0 * u * u) * inv;
-        let s_r = 96.0 * eps * (7.0 * u * u - 2.0 * u) * inv * inv;
-        Jet { s, s_r, ds: [s / eps, 144.0 * eps * (u - 4.0 * u * u) * inv / sigma, 0.0] }
+        let s = (u - u * 2.0 * u) * self.eps24 * inv;
+        let s_r = (u * 7.0 * u - u * 2.0) * (96.0 * eps) * inv * inv;
+        let ds_sigma = (u - u * 4.0 * u) * (144.0 * eps) * inv / L::splat(sigma);
+        Jet { s, s_r, ds: [s / L::splat(eps), ds_sigma, L::splat(0.0)] }
     }
 
     /// The plain term and its derivative at r²: (V, dV/dr / r).
@@ -86,7 +88,7 @@ impl Paired for Plain {
     fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
         lj.shifted_at(r2)
     }
-    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+    fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         Some(lj.jet_at(p, r2))
     }
 }
@@ -105,7 +107,7 @@ impl Paired for Shifted {
         lj.shifted_at(r2)
     }
     /// The shift is a constant: the force's derivatives are the plain term's.
-    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+    fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         Some(lj.jet_at(p, r2))
     }
 }
@@ -126,14 +128,19 @@ impl Paired for ForceShifted {
     }
     /// With V′(r_c) = r_c s(r_c) taken off the force: s − V′(r_c)/r, s_r + V′(r_c)/r³, and the
     /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c).
-    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+    fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
         let r = r2.sqrt();
         let curvature = at_rc.s + lj.rc2 * at_rc.s_r;
+        let slope = L::splat(lj.slope);
         Some(Jet {
-            s: here.s - lj.slope / r,
-            s_r: here.s_r + lj.slope / (r2 * r),
-            ds: [(here.s - lj.slope / r) / p[0], here.ds[1] - lj.rc * at_rc.ds[1] / r, -curvature / r],
+            s: here.s - slope / r,
+            s_r: here.s_r + slope / (r2 * r),
+            ds: [
+                (here.s - slope / r) / L::splat(p[0]),
+                here.ds[1] - L::splat(lj.rc * at_rc.ds[1]) / r,
+                L::splat(-curvature) / r,
+            ],
         })
     }
 }

@@ -188,18 +188,20 @@ pub trait Paired {
     /// gradients run over millions of pairs (`Jet`; `p` the instance's parameters as written).
     /// `None`: the gradient code takes them from the definition (`derivatives::exact::radial`),
     /// to which a test holds every hand-derived one.
-    fn jet(_r: &Self::Row, _p: &[f64], _r2: f64) -> Option<Jet> {
+    /// Written once over a lane type, like `radial`: one pair in the scalar loops, four in the
+    /// cluster pullback (`clusters::pullback`).
+    fn jet<L: Lane>(_r: &Self::Row, _p: &[f64], _r2: L) -> Option<Jet<L>> {
         None
     }
 }
 
 /// s = V′(r)/r (the force on i is s·d), s_r = (V″ − s)/r² (so δs = s_r·(d·δd)) and ∂s/∂p for
-/// each parameter p of the instance (at most three).
+/// each parameter p of the instance (at most three), for one pair (`f64`) or four (`F64x4`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Jet {
-    pub s: f64,
-    pub s_r: f64,
-    pub ds: [f64; 3],
+pub struct Jet<L = f64> {
+    pub s: L,
+    pub s_r: L,
+    pub ds: [L; 3],
 }
 
 /// The force on one body and its energy, from its position, velocity, mass and charge.

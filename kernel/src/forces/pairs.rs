@@ -89,17 +89,13 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         Ok(w.value())
     }
 
-    /// Through the cluster-pair list (`clusters::kernel`), piece by piece (`pieces`): each piece
-    /// sums into a buffer of its own clusters and halo, each cluster's parts are added in piece
-    /// order and given back to its bodies. The cut depends on the list alone: the same bits on
-    /// any number of threads.
+    /// Through the cluster-pair list (`clusters::kernel`), piece by piece (`on_pieces`). The cut
+    /// depends on the list alone: the same bits on any number of threads.
     fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
         let pieces = &l.pieces;
         let traits = clusters::traits::<T>(l, s);
         // (two bodies at one point make the forces non-finite: `accumulate` then names them)
-        let work = |(k, buffer): (usize, &mut Vec<Cluster>)| {
-            buffer.clear();
-            buffer.resize(pieces.size(k), [F64x4::default(); 3]);
+        let sums = self.on_pieces(l, f, |k, buffer| {
             let mut sum = Sum::default();
             for row in &self.rows {
                 sum.merge(match energy {
@@ -108,6 +104,28 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                 });
             }
             sum
+        });
+        let mut energy = Sum::default();
+        for part in sums {
+            energy.merge(part);
+        }
+        Ok(energy.value())
+    }
+
+    /// `work(k, buffer)` on each piece k (`pieces`), on the pool's threads if any, with a zeroed
+    /// buffer of the piece's own clusters and halo; then each cluster's parts added in piece
+    /// order and given back to its bodies in `f`. What each piece returned, in piece order.
+    fn on_pieces<S: Send>(
+        &self,
+        l: &Neighbours,
+        f: &mut [[f64; 3]],
+        work: impl Fn(usize, &mut Vec<Cluster>) -> S + Sync,
+    ) -> Vec<S> {
+        let pieces = &l.pieces;
+        let zeroed = |(k, buffer): (usize, &mut Vec<Cluster>)| {
+            buffer.clear();
+            buffer.resize(pieces.size(k), [F64x4::default(); 3]);
+            work(k, buffer)
         };
         let add = |a: Cluster, b: Cluster| -> Cluster { std::array::from_fn(|c| a[c] + b[c]) };
         let give_back = |(b, fb): (usize, &mut [f64; 3]), summed: &[Cluster]| {
@@ -122,29 +140,24 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         let Output { buffers, summed } = &mut *output;
         buffers.resize_with(pieces.count(), Vec::new);
         summed.resize(l.clusters(), [F64x4::default(); 3]);
-        let sums: Vec<Sum> = match &self.pool {
+        match &self.pool {
             Some(pool) if pieces.count() > 1 => pool.install(|| {
-                let sums = buffers.par_iter_mut().enumerate().map(work).collect();
+                let done = buffers.par_iter_mut().enumerate().map(zeroed).collect();
                 summed
                     .par_iter_mut()
                     .enumerate()
                     .with_min_len(256)
                     .for_each(|(c, s)| *s = pieces.gather(c, buffers, add));
                 f.par_iter_mut().enumerate().with_min_len(1024).for_each(|bf| give_back(bf, summed));
-                sums
+                done
             }),
             _ => {
-                let sums = buffers.iter_mut().enumerate().map(work).collect();
+                let done = buffers.iter_mut().enumerate().map(zeroed).collect();
                 summed.iter_mut().enumerate().for_each(|(c, s)| *s = pieces.gather(c, buffers, add));
                 f.iter_mut().enumerate().for_each(|bf| give_back(bf, summed));
-                sums
+                done
             }
-        };
-        let mut energy = Sum::default();
-        for part in sums {
-            energy.merge(part);
         }
-        Ok(energy.value())
     }
 
     /// Each instance's derivative, gathering what `wanted` names.
@@ -169,30 +182,38 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             && each.iter().enumerate().all(|(k, pd)| T::jet(&self.rows[k], pd.p, 0.25 * pd.reach2.min(1e300)).is_some())
     }
 
-    /// The pullback through the cluster-pair list with the hand-derived jets: each instance's
-    /// parameters' adjoints in one sum, the positions' added pair by pair.
+    /// The pullback through the cluster-pair list with the hand-derived jets, four pairs at a
+    /// time (`clusters::pullback`), piece by piece like the forces (`on_pieces`): each
+    /// instance's parameters' adjoints summed in piece order, the positions' through the
+    /// pieces' buffers. The same bits on any number of threads.
     fn listed_pullback(&self, l: &Neighbours, g: &[[f64; 3]], each: &[PairDerivative], out: &mut Adjoint) {
-        for (k, pd) in each.iter().enumerate() {
-            let (row, p) = (&self.rows[k], pd.p);
-            let wanted: Vec<usize> = pd.which().iter().copied().filter(|&w| w < p.len()).collect();
-            let mut params = [0.0; 3];
-            let _ = l.each_pair::<()>(|i, j, d| {
-                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                let Some(jet) = (r2 < pd.reach2).then(|| T::jet(row, p, r2)).flatten() else { return Ok(()) };
-                let dg = [g[i][0] - g[j][0], g[i][1] - g[j][1], g[i][2] - g[j][2]];
-                let a = dg[0] * d[0] + dg[1] * d[1] + dg[2] * d[2];
-                for c in 0..3 {
-                    let w = jet.s * dg[c] + jet.s_r * a * d[c];
-                    out.x[j][c] += w;
-                    out.x[i][c] -= w;
-                }
-                for &w in &wanted {
-                    params[w] += jet.ds[w] * a;
-                }
-                Ok(())
-            });
-            for &w in &wanted {
-                out.params[pd.term][w] += params[w];
+        let pieces = &l.pieces;
+        // g by cluster, as the kernel reads positions (zeros in empty slots)
+        let g: Vec<Cluster> = (0..l.clusters())
+            .map(|c| {
+                let at = |a: usize, k: usize| match l.bodies[LANES * c + a] {
+                    EMPTY => 0.0,
+                    b => g[b as usize][k],
+                };
+                std::array::from_fn(|k| F64x4::new(std::array::from_fn(|a| at(a, k))))
+            })
+            .collect();
+        let wanted: Vec<Vec<usize>> =
+            each.iter().map(|pd| pd.which().iter().copied().filter(|&w| w < pd.p.len()).collect()).collect();
+        let params: Vec<Vec<[Sum; 3]>> = self.on_pieces(l, &mut out.x, |k, buffer| {
+            (each.iter().enumerate())
+                .map(|(n, pd)| {
+                    let at =
+                        clusters::Pulled { row: &self.rows[n], p: pd.p, reach2: pd.reach2, wanted: &wanted[n], g: &g };
+                    clusters::pullback::<T>(l, &at, pieces.own(k), &pieces.place, buffer)
+                })
+                .collect()
+        });
+        for (n, pd) in each.iter().enumerate() {
+            for &w in &wanted[n] {
+                let mut total = Sum::default();
+                params.iter().for_each(|piece| total.merge(piece[n][w]));
+                out.params[pd.term][w] += total.value();
             }
         }
     }

@@ -20,7 +20,7 @@ impl Paired for Fast {
     }
     /// Inside 2^{1/6}σ the force is Lennard-Jones's (the cutoff moves with σ, but the force is
     /// zero there, so no pair's force jumps).
-    fn jet(lj: &Lj, p: &[f64], r2: f64) -> Option<Jet> {
+    fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         Some(lj.jet_at(p, r2))
     }
 }
