@@ -19,7 +19,7 @@ for cpus in 0 0,1; do
   for _ in $(seq "$rounds"); do
     for bin in "$@"; do
       for s in shifted checked; do
-        t=$(taskset -c $cpus "$bin" run scenes/bench/lj_32k_$s.lagra --steps "$steps" --json |
+        t=$(taskset -c $cpus "$bin" run scenes/bench/lj_32k_$s.lagra --steps "$steps" --threads 1 --json |
           python3 -c "import json,sys; r=json.load(sys.stdin); print(r['wall_s'], r.get('checker_s', 0), r.get('checker_wait_s', 0))")
         echo "$cpus $bin $s $t" | tee -a "$out"
       done

@@ -67,7 +67,7 @@ for cpus in 0 0,1; do
     for k in $(seq "$n"); do
       for s in shifted checked; do
         f="$out/${s}_${cpus/,/}_$steps.json"
-        taskset -c $cpus "$lagra" run scenes/bench/lj_32k_$s.lagra --steps $steps --json > "$f.try" && keep_faster "$f"
+        taskset -c $cpus "$lagra" run scenes/bench/lj_32k_$s.lagra --steps $steps --threads 1 --json > "$f.try" && keep_faster "$f"
       done
     done
   done
