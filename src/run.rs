@@ -1,8 +1,9 @@
 //! `lagra run FILE`.
 
 use crate::progress::{Progress, When};
+use crate::view::PageFrames;
 use crate::{noether, report};
-use lagra_checker::certificate::{self, Certificate};
+use lagra_checker::certificate::{self, Certificate, Trail};
 use lagra_checker::checksum::label;
 use lagra_checker::decision::Verdict;
 use lagra_checker::model::Snapshot;
@@ -11,13 +12,16 @@ use lagra_lang::integrator::Integrator;
 use lagra_lang::scene::Scene;
 use lagra_noether::Analysis;
 use lagra_run::compile;
-use lagra_run::run::{run, Options, Report};
+use lagra_run::marks::{self, OnDisk, Spill};
+use lagra_run::run::{run, Options, Report, Stop};
 use lagra_run::trace::{Behind, Format, Frames, Writer};
 use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -88,7 +92,10 @@ pub fn after_help() -> String {
     s + "Without one, a scene gets velocity_verlet, or rattle if it declares constraints.\n\n\
 Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or was UNDECIDED, a prediction \
 disagreed or could not be measured, or the run halted (a singular force, an iteration that did not converge, a \
-non-finite state); 2 bad input (the scene, a file, an argument)."
+non-finite state); 2 bad input (the scene, a file, an argument); 130 or 143 stopped by SIGINT or SIGTERM \
+(128 + the signal, as a shell reports it): the run stops at its next look at the clock (about every 10^6 \
+atom-steps), the claims are judged up to the state reached, and the certificate (its `run.stopped` says \
+why) and the other files are written as at the end of a run; a second SIGINT ends the process at once."
 }
 
 /// Bad input: the message on stderr, exit code 2.
@@ -176,8 +183,8 @@ pub fn main(a: Args) -> ExitCode {
         },
         None => None,
     };
-    let mut kept = Writer { out: Vec::<u8>::new(), format: Format::Jsonl, cell: scene.model.cell };
-    let mut both = Tee(file.as_mut(), a.view.as_ref().map(|_| &mut kept));
+    let mut kept = a.view.as_ref().map(|_| PageFrames::new(scene.model.cell));
+    let mut both = Tee(file.as_mut(), kept.as_mut());
     let tracing = both.0.is_some() || both.1.is_some();
     let mut states = match a
         .states
@@ -193,6 +200,24 @@ pub fn main(a: Args) -> ExitCode {
         Err(e) => return bad(format!("cannot create the state file: {e}")),
     };
     let mut record = recorder(|s| states.as_mut().map_or(Ok(()), |w| w.push(s)));
+    // the marks: on disk beside the certificate (and thinned for a page), or dropped
+    let spill = match (a.certificate.is_some() || a.view.is_some()).then(|| {
+        let dir = a.certificate.as_deref().and_then(Path::parent).filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.map_or_else(
+            || if a.certificate.is_some() { PathBuf::from(".") } else { std::env::temp_dir() },
+            Path::to_path_buf,
+        );
+        Spill::new(scene.claims.len(), Some(&dir), a.view.is_some())
+            .map_err(|e| format!("cannot make a file for the marks in {}: {e}", dir.display()))
+    }) {
+        None => None,
+        Some(Ok(s)) => Some(s),
+        Some(Err(e)) => return bad(e),
+    };
+    let signalled = match Signalled::listen() {
+        Ok(s) => s,
+        Err(e) => return bad(format!("cannot listen for SIGINT and SIGTERM: {e}")),
+    };
     let mut progress = Progress::new(a.progress.unless(a.quiet), a.steps.unwrap_or(scene.solver.steps));
     let shown = progress.is_some();
     let mut tick = |step: u64| progress.as_mut().into_iter().for_each(|p| p.at(step));
@@ -204,8 +229,9 @@ pub fn main(a: Args) -> ExitCode {
             record: a.states.is_some().then_some(&mut record),
             threads,
             progress: shown.then_some(&mut tick),
-            stop: None,
+            stop: Some(&*signalled.stop),
             watch: None,
+            marks: Some(spill.as_ref().map_or_else(marks::dropped, Spill::sink)),
         },
     );
     progress.iter().for_each(Progress::done);
@@ -220,8 +246,20 @@ pub fn main(a: Args) -> ExitCode {
         Ok(sum) => sum.map(label),
         Err(e) => return bad(format!("writing the state file: {e}")),
     };
-    let summary = summarize(&path, &prepared, &rep, threads, a.explain);
-    if a.certificate.is_some() || a.view.is_some() {
+    let mut summary = summarize(&path, &prepared, &rep, threads, a.explain);
+    // a signal counts if it stopped the run (one after its last step changes nothing)
+    let signal = match rep.stop {
+        Some(Stop::Cancelled { step }) => signalled.which().inspect(|(_, name)| {
+            summary.halted =
+                Some(format!("stopped at step {step} by a signal ({name}): the claims were judged up to there"))
+        }),
+        _ => None,
+    };
+    if let Some(spill) = spill {
+        let (disk, plots) = match spill.finish(&scene.claims) {
+            Ok(t) => t,
+            Err(e) => return bad(format!("writing the marks: {e}")),
+        };
         let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {
             format: certificate::FORMAT.into(),
@@ -235,21 +273,25 @@ pub fn main(a: Args) -> ExitCode {
                 dt: scene.solver.dt,
                 planned_steps: rep.planned_steps,
                 steps: rep.steps,
+                stopped: summary.halted.clone(),
             },
-            trails: rep.outcome.trails.clone(),
+            trails: vec![],
             verdicts: summary.claims.iter().map(|c| c.line.clone()).collect(),
             states_checksum,
             checksum: String::new(),
-        }
-        .seal();
+        };
         if let Some(c) = &a.certificate {
-            if let Err(e) = std::fs::write(c, cert.to_json() + "\n") {
-                return bad(format!("cannot write the certificate {}: {e}", c.display()));
+            if let Err(e) = write_certificate(with_trails(cert.clone(), disk), c) {
+                return bad(e);
             }
         }
-        if let Some(out) = &a.view {
-            let text = String::from_utf8(std::mem::take(&mut kept.out)).map_err(|e| e.to_string());
-            let page = text.and_then(|t| crate::view::page(&t, "the trace", Some(scene), Some(&cert)));
+        if let (Some(out), Some(kept)) = (&a.view, kept) {
+            let (text, stride) = kept.text();
+            if stride > 1 {
+                eprintln!("lagra: the page shows every {stride}th frame, to stay within {} MiB (the trace file, if asked for, has them all)", crate::view::PAGE_TRACE_BYTES >> 20);
+            }
+            let plotted = Certificate { trails: plots, ..cert };
+            let page = crate::view::page(&text, "the trace", Some(scene), Some(&plotted));
             if let Err(e) =
                 page.and_then(|p| std::fs::write(out, p).map_err(|e| format!("cannot write {}: {e}", out.display())))
             {
@@ -262,11 +304,78 @@ pub fn main(a: Args) -> ExitCode {
     } else {
         print!("{}", summary.text());
     }
-    if summary.passed {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
+    match signal {
+        Some((number, _)) => ExitCode::from(128 + number as u8),
+        None if summary.passed => ExitCode::SUCCESS,
+        None => ExitCode::from(1),
     }
+}
+
+/// SIGINT and SIGTERM (Ctrl-C, a batch system's time limit) ask the run to stop: it stops at
+/// its next look at the flag and writes everything as at its end. A second SIGINT ends the
+/// process at once (`register_conditional_shutdown` runs before the flag is set).
+struct Signalled {
+    stop: Arc<AtomicBool>,
+    by: Arc<AtomicUsize>,
+}
+
+impl Signalled {
+    fn listen() -> std::io::Result<Signalled> {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        use signal_hook::flag;
+        let (stop, by) = (Arc::<AtomicBool>::default(), Arc::<AtomicUsize>::default());
+        flag::register_conditional_shutdown(SIGINT, 130, Arc::clone(&stop))?;
+        for sig in [SIGINT, SIGTERM] {
+            flag::register_usize(sig, Arc::clone(&by), sig as usize)?;
+            flag::register(sig, Arc::clone(&stop))?;
+        }
+        Ok(Signalled { stop, by })
+    }
+
+    /// The signal that stopped the run, if one did: its number and name.
+    fn which(&self) -> Option<(i32, &'static str)> {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        match self.by.load(Ordering::SeqCst) as i32 {
+            SIGINT => Some((SIGINT, "SIGINT")),
+            SIGTERM => Some((SIGTERM, "SIGTERM")),
+            _ => None,
+        }
+    }
+}
+
+/// A certificate with other trails (the marks on disk for its file, thinned for a page).
+fn with_trails<M, N>(c: Certificate<M>, trails: Vec<Trail<N>>) -> Certificate<N> {
+    Certificate {
+        format: c.format,
+        arithmetic: c.arithmetic,
+        scene: c.scene,
+        source_digest: c.source_digest,
+        model: c.model,
+        claims: c.claims,
+        run: c.run,
+        trails,
+        verdicts: c.verdicts,
+        states_checksum: c.states_checksum,
+        checksum: c.checksum,
+    }
+}
+
+/// Seals the certificate and writes it, its marks streamed from disk, to a temporary file
+/// beside `to` that is then renamed over it: a reader never sees half a certificate.
+fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<(), String> {
+    let failed = |e: &dyn std::fmt::Display| format!("cannot write the certificate {}: {e}", to.display());
+    let cert = cert.seal().map_err(|e| failed(&e))?;
+    let dir = to.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    // the mode a plain create gives (0666 less the umask), not a temporary file's 0600
+    let mode = std::os::unix::fs::PermissionsExt::from_mode(0o666);
+    let file = tempfile::Builder::new().permissions(mode).tempfile_in(dir).map_err(|e| failed(&e))?;
+    let mut out = BufWriter::new(file);
+    serde_json::to_writer(&mut out, &cert).map_err(|e| failed(&e))?;
+    out.write_all(b"\n").map_err(|e| failed(&e))?;
+    let file = out.into_inner().map_err(|e| failed(&e.into_error()))?;
+    file.as_file().sync_all().map_err(|e| failed(&e))?;
+    file.persist(to).map_err(|e| failed(&e.error))?;
+    Ok(())
 }
 
 /// A trace written to a file and kept in memory for a page, either or both.

@@ -92,7 +92,7 @@ pub fn compare(point: &Point, dir: &Path, shorter: Option<(u64, f64)>) -> Result
         steps = Some(n);
         s.equilibrate = equilibrate;
     }
-    let opts = Options { steps, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None };
+    let opts = Options { marks: Some(lagra_run::marks::dropped()), ..Options::plain(steps) };
     let report = run(&scene, opts)?;
     if let Some(stop) = &report.stop {
         return Err(format!("{}: the run stopped early: {stop:?}", path.display()));

@@ -9,11 +9,46 @@ use lagra_checker::certificate::Certificate;
 use lagra_checker::model::Model;
 use lagra_checker::terms::Shape;
 use lagra_lang::scene::Scene;
+use lagra_run::thinned::Thinned;
+use lagra_run::trace::{Format, Frames, Writer};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 const TEMPLATE: &str = include_str!("view.html");
+
+/// The trace text a page made by `lagra run --view` holds at most (a page much larger does not
+/// load in a browser): past it, the frames are thinned (`lagra_run::thinned`).
+pub const PAGE_TRACE_BYTES: usize = 64 << 20;
+
+/// The frames of a page made during a run, as trace lines, thinned to `PAGE_TRACE_BYTES`.
+pub struct PageFrames {
+    lines: Option<Thinned<Vec<u8>>>,
+    cell: Option<lagra_checker::model::Cell>,
+}
+
+impl PageFrames {
+    pub fn new(cell: Option<lagra_checker::model::Cell>) -> Self {
+        PageFrames { lines: None, cell }
+    }
+
+    /// The trace text, and every how many frames one was kept.
+    pub fn text(self) -> (String, u64) {
+        let stride = self.lines.as_ref().map_or(1, Thinned::stride);
+        let bytes = self.lines.map(Thinned::into_items).unwrap_or_default().concat();
+        (String::from_utf8(bytes).expect("the trace writer writes UTF-8"), stride)
+    }
+}
+
+impl Frames for PageFrames {
+    fn frame(&mut self, s: &lagra_kernel::state::State, energy: f64) -> std::io::Result<()> {
+        let mut line = Writer { out: vec![], format: Format::Jsonl, cell: self.cell };
+        line.frame(s, energy)?;
+        let lines = self.lines.get_or_insert_with(|| Thinned::new(PAGE_TRACE_BYTES / line.out.len().max(1)));
+        lines.push(line.out);
+        Ok(())
+    }
+}
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -54,7 +54,7 @@ fn with_states(r: &Run) -> (i32, String, String) {
 fn edit_cert(r: &Run, reseal: bool, f: impl FnOnce(&mut Certificate)) {
     let mut c: Certificate = serde_json::from_str(&std::fs::read_to_string(&r.cert).unwrap()).unwrap();
     f(&mut c);
-    let c = if reseal { c.seal() } else { c };
+    let c = if reseal { c.seal().unwrap() } else { c };
     std::fs::write(&r.cert, c.to_json()).unwrap();
 }
 

@@ -83,10 +83,12 @@ impl TryFrom<MarkRepr> for Mark {
     }
 }
 
+/// A claim's marks in the order of its checkpoints: in memory (`Vec<Mark>`), or any sequence
+/// that serializes as one (a long run's, read back from disk as the certificate is written).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Trail {
+pub struct Trail<M = Vec<Mark>> {
     pub claim: ClaimKind,
-    pub marks: Vec<Mark>,
+    pub marks: M,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,13 +98,17 @@ pub struct Run {
     pub dt: f64,
     /// The run length asked for; the last of these steps is always a checkpoint.
     pub planned_steps: u64,
-    /// The steps taken (fewer when the run halted).
+    /// The steps taken (fewer when the run halted or was stopped).
     pub steps: u64,
+    /// Why the run ended before `planned_steps`, as its report said (a halt, a signal); absent
+    /// when it ran to the end.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Certificate {
+pub struct Certificate<M = Vec<Mark>> {
     pub format: String,
     /// `ARITHMETIC` of the checker that wrote it; empty (and absent from the JSON) in
     /// certificates written before it was recorded.
@@ -115,7 +121,7 @@ pub struct Certificate {
     pub claims: Vec<Claim>,
     pub run: Run,
     /// One trail per claim, in the order of the claims.
-    pub trails: Vec<Trail>,
+    pub trails: Vec<Trail<M>>,
     /// One verdict line per claim, as printed.
     pub verdicts: Vec<String>,
     /// The checksum of the state file written with this certificate, if one was.
@@ -124,18 +130,26 @@ pub struct Certificate {
     pub checksum: String,
 }
 
+impl<M: Serialize> Certificate<M> {
+    /// Sets the checksum over the canonical form of everything else. The error is the marks'
+    /// (a trail read back from disk).
+    pub fn seal(mut self) -> Result<Self, String> {
+        self.checksum = String::new();
+        self.checksum = label(self.unsealed_hash()?);
+        Ok(self)
+    }
+
+    /// The hash of the canonical JSON with the checksum empty, streamed (never held whole).
+    fn unsealed_hash(&mut self) -> Result<u64, String> {
+        let kept = std::mem::take(&mut self.checksum);
+        let mut hash = Fnv::default();
+        let written = serde_json::to_writer(&mut hash, self).map_err(|e| e.to_string());
+        self.checksum = kept;
+        written.map(|_| hash.value())
+    }
+}
+
 impl Certificate {
-    /// Sets the checksum over the canonical form of everything else.
-    pub fn seal(mut self) -> Certificate {
-        self.checksum = label(self.content_hash());
-        self
-    }
-
-    fn content_hash(&self) -> u64 {
-        let unsealed = Certificate { checksum: String::new(), ..self.clone() };
-        Fnv::of(&serde_json::to_vec(&unsealed).expect("a certificate is plain data"))
-    }
-
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).expect("a certificate is plain data")
     }
@@ -149,8 +163,8 @@ impl Certificate {
             Some(other) => return Err(format!("format `{other}` is not supported; this checker reads {FORMAT}")),
             None => return Err("no `format` field: not a lagra certificate".into()),
         }
-        let c: Certificate = serde_json::from_value(version).map_err(|e| format!("malformed certificate: {e}"))?;
-        if label(c.content_hash()) != c.checksum {
+        let mut c: Certificate = serde_json::from_value(version).map_err(|e| format!("malformed certificate: {e}"))?;
+        if c.unsealed_hash().map(label).as_ref() != Ok(&c.checksum) {
             return Err("checksum does not match the contents: the certificate was edited or damaged".into());
         }
         c.model.validate()?;

@@ -29,6 +29,19 @@ impl Fnv {
     }
 }
 
+/// The hash of whatever is written into it, so that a certificate too long to hold in memory is
+/// hashed as it is serialized.
+impl std::io::Write for Fnv {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        Fnv::write(self, bytes);
+        Ok(bytes.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 /// `fnv1a64:` and 16 hex digits.
 pub fn label(v: u64) -> String {
     format!("fnv1a64:{v:016x}")

@@ -67,6 +67,11 @@ struct Reference {
     measures: Vec<Vec<Outward>>,
 }
 
+/// Where a run's marks go as they are made (the claim's index, the mark) instead of its
+/// trail in memory: to disk, or nowhere when no certificate is written, so that the memory of a
+/// run does not grow with its length (the verdicts are the `Judge`'s running summaries).
+pub type MarkSink = Box<dyn FnMut(usize, Mark) + Send>;
+
 pub struct Monitor {
     model: Model,
     tracks: Vec<Track>,
@@ -81,6 +86,8 @@ pub struct Monitor {
     ahead: Arc<[Foreseen]>,
     /// The last checkpoint's sites, whose memory the next one reuses (`Lifted::reusing`).
     sites: Vec<Site<Outward>>,
+    /// Where the marks go (`None`: the trails, in memory).
+    sink: Option<MarkSink>,
 }
 
 /// What the checker concluded about a run.
@@ -151,7 +158,13 @@ impl Monitor {
             .collect();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let ahead = Arc::default();
-        Ok(Monitor { model, tracks, last_step, reference: None, balance, ledger: None, threads, ahead, sites: vec![] })
+        let (reference, ledger, sites, sink) = (None, None, vec![], None);
+        Ok(Monitor { model, tracks, last_step, reference, balance, ledger, threads, ahead, sites, sink })
+    }
+
+    /// Hands every mark to `sink` as it is made: the outcome's trails are then empty.
+    pub fn hand_marks_to(&mut self, sink: MarkSink) {
+        self.sink = Some(sink);
     }
 
     /// Sums each checkpoint's pair terms on `n` threads (all the CPUs by default): one when
@@ -252,7 +265,10 @@ impl Monitor {
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
                 mark = escalate(model, r, s, &t.claim, self.threads, dissipated, tol);
             }
-            t.marks.push(mark);
+            match self.sink.as_mut() {
+                Some(sink) => sink(n, mark),
+                None => t.marks.push(mark),
+            }
             if let Err(b) = t.judge.admit(s.step, (mark.lo, mark.hi), tol, mark.precision) {
                 t.stopped = Some(Verdict::Fail(b.clone()));
                 first.get_or_insert(Halt::Breach(b));

@@ -159,13 +159,14 @@ fn certificate() -> String {
         source_digest: "sha256:0".into(),
         model: m,
         claims,
-        run: Run { integrator: "velocity_verlet".into(), dt: 1.0, planned_steps: 1, steps: 1 },
+        run: Run { integrator: "velocity_verlet".into(), dt: 1.0, planned_steps: 1, steps: 1, stopped: None },
         trails: out.trails,
         verdicts: vec!["x".into()],
         states_checksum: None,
         checksum: String::new(),
     }
     .seal()
+    .expect("marks in memory")
     .to_json()
 }
 

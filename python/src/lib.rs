@@ -9,7 +9,9 @@ use lagra::run::{prepare, summarize, Prepared};
 use lagra_checker::model::Cell;
 use lagra_kernel::state::State;
 use lagra_lang::params::apply_settings;
+use lagra_run::marks::Spill;
 use lagra_run::run::{run, Options, Watch};
+use lagra_run::thinned::Kept;
 use lagra_run::trace::{Format, Recorded, Writer};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
@@ -232,7 +234,9 @@ impl PyScene {
             failure.lock().unwrap_or_else(|p| p.into_inner()).get_or_insert(e);
             stop.store(true, Ordering::Relaxed);
         };
-        let mut frames = Recorded::default();
+        let mut frames = Kept::within(FRAME_BYTES);
+        let marks =
+            Spill::new(prepared.scene.claims.len(), None, true).map_err(|e| PyValueError::new_err(e.to_string()))?;
         let scene = &prepared.scene;
         let outcome = py.detach(|| {
             // Ctrl-C is seen here, and the progress function called, about every 10⁶ atom-steps
@@ -267,6 +271,7 @@ impl PyScene {
                 progress: Some(&mut tick),
                 stop: Some(&stop),
                 watch,
+                marks: Some(marks.sink()),
             };
             run(scene, opts)
         });
@@ -276,7 +281,9 @@ impl PyScene {
         let report = outcome.map_err(scene_error)?;
         let summary = summarize(&self.path, &prepared, &report, threads, false);
         let json = serde_json::to_string(&summary).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let trails = serde_json::to_string(&report.outcome.trails).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let (_, plotted) = marks.finish(&scene.claims).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let trails = serde_json::to_string(&plotted).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let frames = frames.into_recorded();
         let (k, n) = (frames.steps.len(), frames.bodies);
         // the frames' storage becomes the arrays' (no copy)
         let shaped = |v: Vec<f64>| v.into_pyarray(py).reshape([k, n, 3]).map(Bound::unbind);
@@ -318,12 +325,17 @@ impl PyScene {
     }
 }
 
+/// The frames a run keeps for `Run.positions` and `Run.velocities` at most (1 GiB): past it every
+/// 2nd, 4th, ... frame and the last (`frame_steps` says which); `lagra run --trace` keeps all.
+const FRAME_BYTES: usize = 1 << 30;
+
 /// A finished run: the report and the frames.
 #[pyclass(module = "lagra._lagra", name = "Run")]
 struct PyRun {
     #[pyo3(get)]
     report: String,
-    /// Each claim's certified enclosure at every checkpoint (the certificate's trails).
+    /// Each claim's certified enclosure per checkpoint (the certificate's trails), at most
+    /// `lagra_run::marks::PLOTTED` a claim: past that every 2nd, 4th, ... and the last.
     #[pyo3(get)]
     trails: String,
     #[pyo3(get)]

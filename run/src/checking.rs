@@ -194,25 +194,9 @@ mod tests {
     /// A run with a trace cannot overlap (the trace would show states past a breach): the
     /// reference, inline.
     fn both(scene: &lagra_lang::scene::Scene) -> (Report, Report) {
-        let overlapped = run(
-            scene,
-            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
-        )
-        .unwrap();
+        let overlapped = run(scene, Options::plain(None)).unwrap();
         let mut sink = crate::trace::Recorded::default();
-        let inline = run(
-            scene,
-            Options {
-                steps: None,
-                trace: Some(&mut sink),
-                record: None,
-                threads: 1,
-                progress: None,
-                stop: None,
-                watch: None,
-            },
-        )
-        .unwrap();
+        let inline = run(scene, Options { trace: Some(&mut sink), ..Options::plain(None) }).unwrap();
         assert!(overlapped.checker.starts_with("on a second thread") && inline.checker.starts_with("inline"));
         (overlapped, inline)
     }
@@ -273,18 +257,7 @@ mod tests {
     fn with_progress(scene: &lagra_lang::scene::Scene) -> (Report, Vec<u64>) {
         let mut reached = vec![];
         let mut tick = |step: u64| reached.push(step);
-        let r = run(
-            scene,
-            Options {
-                steps: None,
-                trace: None,
-                record: None,
-                threads: 1,
-                progress: Some(&mut tick),
-                stop: None,
-                watch: None,
-            },
-        );
+        let r = run(scene, Options { progress: Some(&mut tick), ..Options::plain(None) });
         (r.unwrap(), reached)
     }
 
@@ -308,29 +281,13 @@ mod tests {
                    solver {{ dt: {dt}, steps: 400 }} }}"
             ))
             .unwrap();
-            let straight = run(
-                &scene,
-                Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
-            )
-            .unwrap();
+            let straight = run(&scene, Options::plain(None)).unwrap();
             let mut shown = 0;
             let mut each = |_: &lagra_checker::model::Snapshot| -> std::io::Result<()> {
                 shown += 1;
                 Ok(())
             };
-            let every = run(
-                &scene,
-                Options {
-                    steps: None,
-                    trace: None,
-                    record: Some(&mut each),
-                    threads: 1,
-                    progress: None,
-                    stop: None,
-                    watch: None,
-                },
-            )
-            .unwrap();
+            let every = run(&scene, Options { record: Some(&mut each), ..Options::plain(None) }).unwrap();
             same(&straight, &every);
             assert_eq!(shown, every.steps + 1);
             assert!(format!("{:?}", every.stop).starts_with(ends), "{:?}", every.stop);
@@ -350,19 +307,11 @@ mod tests {
     #[test]
     fn a_watch_sees_every_nth_state_and_changes_nothing() {
         let scene = melt(1e-2);
-        let plain = run(
-            &scene,
-            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
-        )
-        .unwrap();
+        let plain = run(&scene, Options::plain(None)).unwrap();
         let mut seen = vec![];
         let mut see = |s: &lagra_kernel::state::State| seen.push((s.step, s.x[7]));
         let watch = Some(crate::run::Watch { every: 7, see: &mut see });
-        let watched = run(
-            &scene,
-            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch },
-        )
-        .unwrap();
+        let watched = run(&scene, Options { watch, ..Options::plain(None) }).unwrap();
         same(&plain, &watched);
         let steps: Vec<u64> = seen.iter().map(|s| s.0).collect();
         assert_eq!(steps, (1..=plain.steps / 7).map(|k| 7 * k).collect::<Vec<_>>());
@@ -377,11 +326,7 @@ mod tests {
                bond harmonic [0, 1] { k: 3, r0: 1 } solver { dt: 0.01, steps: 1200000 } }",
         )
         .unwrap();
-        let plain = run(
-            &scene,
-            Options { steps: None, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None },
-        )
-        .unwrap();
+        let plain = run(&scene, Options::plain(None)).unwrap();
         let (watched, reached) = with_progress(&scene);
         same(&plain, &watched);
         assert_eq!(reached, [1 << 19, 1 << 20, 1_200_000]);

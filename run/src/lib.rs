@@ -5,10 +5,12 @@
 
 pub mod checking;
 pub mod grad;
+pub mod marks;
 pub mod observables;
 pub mod predict;
 pub mod run;
 pub mod tail;
+pub mod thinned;
 pub mod trace;
 
 use lagra_lang::{Diagnostic, Scene};

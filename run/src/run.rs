@@ -7,7 +7,7 @@ use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
 use crate::trace::Frames;
 use lagra_checker::model::Snapshot;
-use lagra_checker::monitor::{Halt, Monitor, Outcome};
+use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
 use lagra_checker::terms::Kind;
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::solvers::{Iterations, Stepper};
@@ -89,12 +89,15 @@ pub struct Options<'a> {
     pub stop: Option<&'a std::sync::atomic::AtomicBool>,
     /// Shown the state every so many steps (a notebook's live plot); the run is the same bits.
     pub watch: Option<Watch<'a>>,
+    /// Where the checker's marks go (`crate::marks`); without it the outcome's trails hold
+    /// them all, in memory, which grows with the run.
+    pub marks: Option<MarkSink>,
 }
 
 impl Options<'_> {
     /// A run of `steps` (the scene's if `None`) on one thread, with nothing attached.
     pub fn plain(steps: Option<u64>) -> Self {
-        Options { steps, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None }
+        Options { steps, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None, marks: None }
     }
 }
 /// A look at the state every `every` steps.
@@ -130,7 +133,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
-    let monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
+    let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
+    if let Some(sink) = opts.marks.take() {
+        monitor.hand_marks_to(sink);
+    }
     let mut state = lagra_kernel::setup::start(&scene);
     let mut observer = Observer::new(scene, &graph, steps)?;
     let mut meters: Vec<(Meter, &Prediction)> =

@@ -223,6 +223,8 @@ fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &Atom
         progress: Some(&mut tick),
         stop: Some(cancel),
         watch: None,
+        // the answer is the summary: the marks are not kept
+        marks: Some(lagra_run::marks::dropped()),
     };
     let rep = lagra_run::run::run(scene, opts)?;
     let summary: report::Summary = run::summarize(&path, &prepared, &rep, threads, false);

@@ -35,5 +35,5 @@ pub fn reseal(states: &Path, cert: &Path, mut b: Vec<u8>) {
     let mut sealed: lagra_checker::certificate::Certificate =
         serde_json::from_str(&std::fs::read_to_string(cert).unwrap()).unwrap();
     sealed.states_checksum = Some(label(sum));
-    std::fs::write(cert, sealed.seal().to_json()).unwrap();
+    std::fs::write(cert, sealed.seal().unwrap().to_json()).unwrap();
 }

@@ -389,7 +389,7 @@ pub fn bond_positions(x: &[[f64; 3]], bodies: &[usize], images: &Option<Images>)
 
 /// A pair of bodies singular for the radial form (at one point): an error like the force's.
 pub fn coincident(name: &'static str, i: usize, j: usize) -> Singularity {
-    Singularity { term: name, bodies: vec![i, j], what: "at the same point, where the pair force is infinite" }
+    Singularity { term: name, bodies: vec![i, j], what: super::SAME_POINT, seen: None }
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The loops terms run in besides the pairs (`pairs`): over listed bodies, over each body.
 
 use super::derivative::{bond_positions, Adjoint, Direction, Instance, Wanted};
-use super::{stride_alone, sub, Bonded, Field, Force, Frame, Parts, Singularity};
+use super::{length, shown, stride_alone, sub, Bonded, Field, Force, Frame, Parts, Singularity};
 use crate::step::Stride;
 use crate::sum::Sum;
 use lagra_checker::model::{Images, Model, TermInstance};
@@ -15,9 +15,15 @@ pub(super) trait Finite: Sized {
     fn finite(self, energy: bool) -> Result<Self, &'static str>;
 }
 
-pub(super) const OVERFLOW: &str = "so close to a singular configuration that the force overflows binary64";
+pub(super) const OVERFLOW: &str = "its force or energy overflows binary64 (beyond ±1.8e308)";
 pub(super) const FAR: &str =
     "so far apart that their separation overflows binary64 (beyond 1.8e308): no force can be computed";
+
+/// The coordinates of `bodies`, for a message about them.
+pub(super) fn at(x: &[[f64; 3]], bodies: &[usize]) -> Option<String> {
+    let one = |&i: &usize| format!("x{i} = [{}, {}, {}]", shown(x[i][0]), shown(x[i][1]), shown(x[i][2]));
+    Some(bodies.iter().map(one).collect::<Vec<_>>().join(", "))
+}
 
 /// Whether a displacement between two bodies overflowed (bodies near ±1e308 on opposite sides).
 pub(super) fn overflowed(d: &[f64; 3]) -> bool {
@@ -159,8 +165,14 @@ impl<T: Bonded<N>, const N: usize> Bonds<T, N> {
         // velocities only for a group that reads them (`Bonded::velocity_dependent`)
         let v: [[f64; 3]; N] = if self.velocity { std::array::from_fn(|i| s.v[b[i]]) } else { [[0.0; 3]; N] };
         let (fs, e) = T::eval(self.rows.row(k), &x, &v).and_then(|r| r.finite(energy)).map_err(|what| {
-            let far = x.iter().any(|xi| overflowed(&sub(xi, &x[0])));
-            Singularity { term: self.name, bodies: b.to_vec(), what: if far { FAR } else { what } }
+            let widest = x.iter().map(|xi| length(&sub(xi, &x[0]))).fold(0.0, f64::max);
+            let (what, seen) = match x.iter().any(|xi| overflowed(&sub(xi, &x[0]))) {
+                true => (FAR, at(s.x, b)),
+                false if widest == 0.0 => (what, None),
+                false if b.len() == 2 => (what, Some(format!("the bodies {} apart", shown(widest)))),
+                false => (what, Some(format!("the bodies up to {} from body {}", shown(widest), b[0]))),
+            };
+            Singularity { term: self.name, bodies: b.to_vec(), what, seen }
         })?;
         Ok((x, fs, e))
     }
@@ -228,7 +240,7 @@ impl<T: Field + Send + Sync> Force for Fields<T> {
             let mut one = |i: usize| -> Result<(), Singularity> {
                 let (a, e) = T::eval(p, &s.x[i], &s.v[i], s.m[i], s.q[i])
                     .and_then(|r| r.finite(true))
-                    .map_err(|what| Singularity { term: self.name, bodies: vec![i], what })?;
+                    .map_err(|what| Singularity { term: self.name, bodies: vec![i], what, seen: at(s.x, &[i]) })?;
                 for c in 0..3 {
                     f[i][c] += a[c];
                 }

@@ -51,12 +51,28 @@ pub struct Singularity {
     pub term: &'static str,
     pub bodies: Vec<usize>,
     pub what: &'static str,
+    /// The numbers where it happened (the bodies' separation, or their coordinates), when known.
+    pub seen: Option<String>,
+}
+
+impl Singularity {
+    /// A pair's, `d` apart.
+    fn pair(term: &'static str, i: usize, j: usize, what: &'static str, d: &[f64; 3]) -> Singularity {
+        let r = length(d);
+        Singularity {
+            term,
+            bodies: vec![i, j],
+            what,
+            seen: (r > 0.0).then(|| format!("the bodies {} apart", shown(r))),
+        }
+    }
 }
 
 impl fmt::Display for Singularity {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let b: Vec<String> = self.bodies.iter().map(|b| b.to_string()).collect();
-        write!(f, "{}: bodies {}: {}", self.term, b.join(", "), self.what)
+        write!(f, "{}: bodies {}: {}", self.term, b.join(", "), self.what)?;
+        self.seen.as_ref().map_or(Ok(()), |seen| write!(f, ", {seen}"))
     }
 }
 
@@ -266,6 +282,20 @@ pub(crate) fn central(d: [f64; 3], vr: impl Fn(f64) -> (f64, f64)) -> Result<([f
 
 pub(crate) fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// A number for a message: plain where that is short, else in exponent form (1e308, 2.5e-9).
+pub(crate) fn shown(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// |d| without overflow or underflow in its squares, for messages about far-apart bodies.
+pub(crate) fn length(d: &[f64; 3]) -> f64 {
+    d[0].hypot(d[1]).hypot(d[2])
 }
 
 pub(crate) fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {

@@ -4,7 +4,7 @@
 
 use super::clusters;
 use super::derivative::{coincident, Adjoint, Direction, PairDerivative, Wanted};
-use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
+use super::groups::{at, overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
@@ -77,11 +77,8 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         let mut w = Sum::default();
         for p in &self.rows {
             l.each_pair(|i, j, d| {
-                let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j)).map_err(|what| Singularity {
-                    term: self.name,
-                    bodies: vec![i, j],
-                    what,
-                })?;
+                let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
+                    .map_err(|what| Singularity::pair(self.name, i, j, what, &d))?;
                 w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
                 Ok(())
             })?;
@@ -259,15 +256,13 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             if overflowed(&d) {
-                return Err(Singularity { term: self.name, bodies: vec![i, j], what: FAR });
+                return Err(Singularity { term: self.name, bodies: vec![i, j], what: FAR, seen: at(s.x, &[i, j]) });
             }
             let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
             for p in &self.rows {
-                let (a, e) = T::eval(p, d, mq, colour).and_then(|r| r.finite(true)).map_err(|what| Singularity {
-                    term: self.name,
-                    bodies: vec![i, j],
-                    what,
-                })?;
+                let (a, e) = T::eval(p, d, mq, colour)
+                    .and_then(|r| r.finite(true))
+                    .map_err(|what| Singularity::pair(self.name, i, j, what, &d))?;
                 // applied so that the two are exactly opposite
                 for c in 0..3 {
                     f[i][c] += a[c];
@@ -322,7 +317,7 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         // Rare: find the pair that overflowed, by the checked traversal.
         let mut scratch = vec![[0.0; 3]; f.len()];
         self.traversed(s, &mut scratch)?;
-        Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW })
+        Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW, seen: None })
     }
     fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>> {
         if let Some(list) = &self.list {
@@ -331,15 +326,14 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             return Some(self.listed_virial(&l, s));
         }
         let mut w = Sum::default();
-        let visited =
-            self.within_reach(s, |i, j, d| {
-                for p in &self.rows {
-                    let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
-                        .map_err(|what| Singularity { term: self.name, bodies: vec![i, j], what })?;
-                    w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
-                }
-                Ok(())
-            });
+        let visited = self.within_reach(s, |i, j, d| {
+            for p in &self.rows {
+                let (a, _) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
+                    .map_err(|what| Singularity::pair(self.name, i, j, what, &d))?;
+                w.add(-(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+            }
+            Ok(())
+        });
         Some(visited.map(|_| w.value()))
     }
     fn velocity_dependent(&self) -> bool {

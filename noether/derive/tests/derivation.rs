@@ -133,15 +133,7 @@ fn charges_agree_with_the_checker(t: &Table, path: &Path) {
     let scene = compile(&source).unwrap_or_else(|d| panic!("{}", d.render(&path.display().to_string(), &source)));
     let mut trace = Writer { out: vec![], format: Format::Jsonl, cell: scene.model.cell };
     let steps = scene.solver.steps.min(200);
-    let opts = Options {
-        steps: Some(steps),
-        trace: Some(&mut trace),
-        record: None,
-        threads: 1,
-        progress: None,
-        stop: None,
-        watch: None,
-    };
+    let opts = Options { trace: Some(&mut trace), ..Options::plain(Some(steps)) };
     run(&scene, opts).unwrap();
     let frames: Vec<serde_json::Value> =
         String::from_utf8(trace.out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
