@@ -50,12 +50,33 @@ impl Packing {
 /// this would not fit in the memory the machine has free.
 pub const BYTES_PER_BODY: u64 = 2500;
 
-/// The memory the machine has free now (Linux's MemAvailable), if it says.
+/// The memory this process may still take, where the system says: the least of what the machine
+/// has free (Linux's MemAvailable), what its control group allows beyond what the group uses (a
+/// batch system's cap: cgroup v2 `memory.max`, v1 `memory.limit_in_bytes`), and its
+/// address-space limit (`ulimit -v`) beyond its size now.
 pub fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    let number = |p: &str| read(p)?.trim().parse::<u64>().ok();
+    // a field of /proc's `key: value kB` files, or a column of /proc/self/limits
+    let field = |text: &str, key: &str, column: usize| -> Option<u64> {
+        text.lines().find(|l| l.starts_with(key))?.split_whitespace().nth(column)?.parse().ok()
+    };
+    let free = read("/proc/meminfo").and_then(|m| field(&m, "MemAvailable:", 1)).map(|kb| kb * 1024);
+    let group = read("/proc/self/cgroup").and_then(|groups| {
+        groups.lines().find_map(|l| match l.split(':').collect::<Vec<_>>()[..] {
+            ["0", "", path] => Some(("", path.to_string(), "memory.max", "memory.current")),
+            [_, "memory", path] => Some(("memory", path.to_string(), "memory.limit_in_bytes", "memory.usage_in_bytes")),
+            _ => None,
+        })
+    });
+    let capped = group.and_then(|(v1, path, max, now)| {
+        let dir = format!("/sys/fs/cgroup/{v1}/{path}");
+        Some(number(&format!("{dir}/{max}"))?.saturating_sub(number(&format!("{dir}/{now}"))?))
+    });
+    let address = read("/proc/self/limits")
+        .and_then(|l| field(&l, "Max address space", 3))
+        .and_then(|limit| Some(limit.saturating_sub(field(&read("/proc/self/status")?, "VmSize:", 1)? * 1024)));
+    [free, capped, address].into_iter().flatten().min()
 }
 
 impl Packing {

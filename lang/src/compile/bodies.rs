@@ -186,7 +186,7 @@ impl<'a> Compiler<'a> {
             return err(
                 value_span(&cells_f),
                 format!(
-                    "a lattice of {bodies} bodies would need about {:.1} GB ({} bytes a body: state, forces, neighbour list, the checker's enclosures); this machine has {:.1} GB free",
+                    "a lattice of {bodies} bodies would need about {:.1} GB ({} bytes a body: state, forces, neighbour list, the checker's enclosures); this process may take {:.1} GB more (the machine's free memory, its control group's and its address-space limits)",
                     gb(need),
                     lattice::BYTES_PER_BODY,
                     gb(free)
