@@ -56,7 +56,9 @@ pub struct Singularity {
 }
 
 impl Singularity {
-    /// A pair's, `d` apart.
+    /// A pair's, `d` apart. Cold and out of line, like every error built in a force loop.
+    #[cold]
+    #[inline(never)]
     fn pair(term: &'static str, i: usize, j: usize, what: &'static str, d: &[f64; 3]) -> Singularity {
         let r = length(d);
         Singularity {
@@ -65,6 +67,13 @@ impl Singularity {
             what,
             seen: (r > 0.0).then(|| format!("the bodies {} apart", shown(r))),
         }
+    }
+
+    /// One with the coordinates of its bodies.
+    #[cold]
+    #[inline(never)]
+    fn located(term: &'static str, bodies: &[usize], what: &'static str, x: &[[f64; 3]]) -> Singularity {
+        Singularity { term, bodies: bodies.to_vec(), what, seen: groups::at(x, bodies) }
     }
 }
 

@@ -4,7 +4,7 @@
 
 use super::clusters;
 use super::derivative::{coincident, Adjoint, Direction, PairDerivative, Wanted};
-use super::groups::{at, overflowed, Finite, Rows, FAR, OVERFLOW};
+use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
@@ -256,7 +256,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         let mut energy = Sum::default();
         traverse::pairs(s.x, &self.cell, self.reach, |i, j, d| {
             if overflowed(&d) {
-                return Err(Singularity { term: self.name, bodies: vec![i, j], what: FAR, seen: at(s.x, &[i, j]) });
+                return Err(Singularity::located(self.name, &[i, j], FAR, s.x));
             }
             let (mq, colour) = (bodies::<T>(s, i, j), colour::<T>(s, i, j));
             for p in &self.rows {
