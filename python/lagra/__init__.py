@@ -38,7 +38,11 @@ class Verdict:
 
 
 class Result:
-    """A finished run: the report, the verdicts and the frames (every `frame_every` steps)."""
+    """A finished run: the report, the verdicts and the frames (every `frame_every` steps).
+
+    What a run keeps in memory is bounded however long it is: the frames to 1 GiB (past it
+    every 2nd, 4th, ... frame and the last; `steps` says which) and each claim's bounds to
+    20,000 checkpoints the same way. Ask `lagra run --trace FILE --certificate FILE` for all."""
 
     def __init__(self, run: "_lagra.Run"):
         self._run = run
@@ -78,7 +82,7 @@ class Result:
 
     @property
     def bounds(self) -> dict:
-        """Each certified claim's enclosure at every checkpoint: {claim: (steps, lo, hi, tol)} as
+        """Each certified claim's enclosure per checkpoint: {claim: (steps, lo, hi, tol)} as
         NumPy arrays (what `lagra view` plots; a certificate's trails). A claim declared again
         (a second `distance`) is `distance#1`."""
         import numpy as np
