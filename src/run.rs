@@ -93,7 +93,7 @@ pub fn after_help() -> String {
 Exit status: 0 every claim PASSed and every prediction agreed; 1 a claim FAILed or was UNDECIDED, a prediction \
 disagreed or could not be measured, or the run halted (a singular force, an iteration that did not converge, a \
 non-finite state); 2 bad input (the scene, a file, an argument); 130 or 143 stopped by SIGINT or SIGTERM \
-(128 + the signal, as a shell reports it): the run stops at its next look at the clock (about every 10^6 \
+(128 + the signal, as a shell reports it): the run stops at its next look at the flag (about every 10^6 \
 atom-steps), the claims are judged up to the state reached, and the certificate (its `run.stopped` says \
 why) and the other files are written as at the end of a run; a second SIGINT ends the process at once."
 }
@@ -202,11 +202,7 @@ pub fn main(a: Args) -> ExitCode {
     let mut record = recorder(|s| states.as_mut().map_or(Ok(()), |w| w.push(s)));
     // the marks: on disk beside the certificate (and thinned for a page), or dropped
     let spill = match (a.certificate.is_some() || a.view.is_some()).then(|| {
-        let dir = a.certificate.as_deref().and_then(Path::parent).filter(|d| !d.as_os_str().is_empty());
-        let dir = dir.map_or_else(
-            || if a.certificate.is_some() { PathBuf::from(".") } else { std::env::temp_dir() },
-            Path::to_path_buf,
-        );
+        let dir = a.certificate.as_deref().map_or_else(std::env::temp_dir, |c| folder_of(c).to_path_buf());
         Spill::new(scene.claims.len(), Some(&dir), a.view.is_some())
             .map_err(|e| format!("cannot make a file for the marks in {}: {e}", dir.display()))
     }) {
@@ -288,7 +284,8 @@ pub fn main(a: Args) -> ExitCode {
         if let (Some(out), Some(kept)) = (&a.view, kept) {
             let (text, stride) = kept.text();
             if stride > 1 {
-                eprintln!("lagra: the page shows every {stride}th frame, to stay within {} MiB (the trace file, if asked for, has them all)", crate::view::PAGE_TRACE_BYTES >> 20);
+                let budget = crate::view::PAGE_TRACE_BYTES >> 20;
+                eprintln!("lagra: the page shows one frame in {stride} (and the last), to stay within {budget} MiB; a --trace file has them all");
             }
             let plotted = Certificate { trails: plots, ..cert };
             let page = crate::view::page(&text, "the trace", Some(scene), Some(&plotted));
@@ -365,7 +362,7 @@ fn with_trails<M, N>(c: Certificate<M>, trails: Vec<Trail<N>>) -> Certificate<N>
 fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<(), String> {
     let failed = |e: &dyn std::fmt::Display| format!("cannot write the certificate {}: {e}", to.display());
     let cert = cert.seal().map_err(|e| failed(&e))?;
-    let dir = to.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = folder_of(to);
     // the mode a plain create gives (0666 less the umask), not a temporary file's 0600
     let mode = std::os::unix::fs::PermissionsExt::from_mode(0o666);
     let file = tempfile::Builder::new().permissions(mode).tempfile_in(dir).map_err(|e| failed(&e))?;
@@ -376,6 +373,11 @@ fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<(), String>
     file.as_file().sync_all().map_err(|e| failed(&e))?;
     file.persist(to).map_err(|e| failed(&e.error))?;
     Ok(())
+}
+
+/// The folder a file named by `path` is in (`.` for a bare name).
+fn folder_of(path: &Path) -> &Path {
+    path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."))
 }
 
 /// A trace written to a file and kept in memory for a page, either or both.
