@@ -97,9 +97,15 @@ impl Summary {
             Stop::Checker(Halt::InvalidState(m)) => format!("halted: {m}"),
             Stop::Solver { step, message } => format!("halted at step {step}: {message}"),
             Stop::Cancelled { step } => format!("cancelled at step {step}: the claims were judged up to there"),
+            Stop::Until { step } => {
+                format!("stopped at step {step}, as --until asked: the claims were judged up to there")
+            }
         });
-        let passed =
-            halted.is_none() && claims.iter().all(|c| c.verdict.is_pass()) && r.predictions.iter().all(|p| p.agrees);
+        // a run stopped where it was asked to stop has not failed
+        let paused = matches!(r.stop, Some(Stop::Until { .. }));
+        let passed = (halted.is_none() || paused)
+            && claims.iter().all(|c| c.verdict.is_pass())
+            && r.predictions.iter().all(|p| p.agrees);
         let atom_steps = r.steps as f64 * scene.model.bodies.len() as f64;
         Summary {
             file: file.to_string(),

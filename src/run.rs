@@ -13,7 +13,8 @@ use lagra_lang::scene::Scene;
 use lagra_noether::Analysis;
 use lagra_run::compile;
 use lagra_run::marks::{self, OnDisk, Spill};
-use lagra_run::run::{run, Options, Report, Stop};
+use lagra_run::restart::Restart;
+use lagra_run::run::{run, Options, Report, Restarts, Stop};
 use lagra_run::trace::{Behind, Format, Frames, Writer};
 use sha2::{Digest, Sha256};
 use std::fs::File;
@@ -72,6 +73,24 @@ pub struct Args {
     /// No progress bar (the same as --progress never).
     #[arg(long)]
     quiet: bool,
+    /// Write a restart file at the end of the run, and where a signal or --until stops it: the
+    /// exact state and everything the run carries to its next step, so that --resume continues
+    /// it to the bit (written to a temporary file, synced, renamed).
+    #[arg(long, value_name = "FILE")]
+    restart: Option<PathBuf>,
+    /// Also write the restart file every N steps, each replacing the one before (the checker
+    /// then judges on the kernel's thread).
+    #[arg(long, value_name = "N", requires = "restart")]
+    restart_every: Option<u64>,
+    /// Continue the run a restart file holds, to the scene's last step (or --steps): the same
+    /// states, marks and verdicts as the run never stopped. Its certificate names the one
+    /// before; `lagra-check` re-checks the segments as one run.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Stop at this step of the run (counted from its start, not from a --resume), as a signal
+    /// would: the claims judged up to there, the files written, a restart file to go on from.
+    #[arg(long, value_name = "STEP")]
+    until: Option<u64>,
     /// Refuse (exit 2) a scene that declares a claim its symmetries cannot support (momentum
     /// along a floor's normal); without it that is a warning.
     #[arg(long)]
@@ -171,6 +190,17 @@ pub fn main(a: Args) -> ExitCode {
     if a.steps == Some(0) {
         return bad("--steps must be at least 1");
     }
+    if a.restart_every == Some(0) {
+        return bad("--restart-every must be at least 1");
+    }
+    let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+    let digest = format!("sha256:{digest}");
+    let resume = match a.resume.as_deref().map(|p| Restart::read(p).and_then(|r| r.belongs_to(&digest).map(|_| r))) {
+        None => None,
+        Some(Ok(r)) => Some(r),
+        Some(Err(e)) => return bad(format!("--resume: {e}")),
+    };
+    let previous = resume.as_ref().and_then(|r| r.certificate.clone());
     // the trace goes to its file, and, for a page, to memory as well
     let format = match a.trace.as_deref().map(Format::of).transpose() {
         Ok(f) => f,
@@ -217,6 +247,12 @@ pub fn main(a: Args) -> ExitCode {
     let mut progress = Progress::new(a.progress.unless(a.quiet), a.steps.unwrap_or(scene.solver.steps));
     let shown = progress.is_some();
     let mut tick = |step: u64| progress.as_mut().into_iter().for_each(|p| p.at(step));
+    let mut write_restart = |mut r: Restart| {
+        r.scene.clone_from(&digest);
+        a.restart.as_deref().map_or(Ok(()), |p| r.write(p))
+    };
+    let restarts =
+        a.restart.is_some().then(|| Restarts { every: a.restart_every.unwrap_or(u64::MAX), write: &mut write_restart });
     let result = run(
         scene,
         Options {
@@ -228,6 +264,9 @@ pub fn main(a: Args) -> ExitCode {
             stop: Some(&*signalled.stop),
             watch: None,
             marks: Some(spill.as_ref().map_or_else(marks::dropped, Spill::sink)),
+            resume,
+            until: a.until,
+            restarts,
         },
     );
     progress.iter().for_each(Progress::done);
@@ -251,17 +290,18 @@ pub fn main(a: Args) -> ExitCode {
         }),
         _ => None,
     };
+    // the checksum of the certificate written, for the restart file to name
+    let mut written = None;
     if let Some(spill) = spill {
         let (disk, plots) = match spill.finish(&scene.claims) {
             Ok(t) => t,
             Err(e) => return bad(format!("writing the marks: {e}")),
         };
-        let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
         let cert = Certificate {
             format: certificate::FORMAT.into(),
             arithmetic: certificate::ARITHMETIC.into(),
             scene: scene.name.clone(),
-            source_digest: format!("sha256:{digest}"),
+            source_digest: digest.clone(),
             model: scene.model.clone(),
             claims: scene.claims.clone(),
             run: certificate::Run {
@@ -270,15 +310,18 @@ pub fn main(a: Args) -> ExitCode {
                 planned_steps: rep.planned_steps,
                 steps: rep.steps,
                 stopped: summary.halted.clone(),
+                first_step: rep.first_step,
             },
             trails: vec![],
             verdicts: summary.claims.iter().map(|c| c.line.clone()).collect(),
             states_checksum,
+            previous,
             checksum: String::new(),
         };
         if let Some(c) = &a.certificate {
-            if let Err(e) = write_certificate(with_trails(cert.clone(), disk), c) {
-                return bad(e);
+            match write_certificate(with_trails(cert.clone(), disk), c) {
+                Ok(sum) => written = Some(sum),
+                Err(e) => return bad(e),
             }
         }
         if let (Some(out), Some(kept)) = (&a.view, kept) {
@@ -295,6 +338,16 @@ pub fn main(a: Args) -> ExitCode {
                 return bad(e);
             }
         }
+    }
+    match (&a.restart, rep.restart) {
+        (Some(p), Some(Ok(mut r))) => {
+            (r.scene, r.certificate) = (digest.clone(), written);
+            if let Err(e) = r.write(p) {
+                return bad(e);
+            }
+        }
+        (Some(p), Some(Err(why))) => eprintln!("lagra: no restart file written to {}: {why}", p.display()),
+        _ => {}
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&summary).expect("the summary is plain data"));
@@ -353,13 +406,14 @@ fn with_trails<M, N>(c: Certificate<M>, trails: Vec<Trail<N>>) -> Certificate<N>
         trails,
         verdicts: c.verdicts,
         states_checksum: c.states_checksum,
+        previous: c.previous,
         checksum: c.checksum,
     }
 }
 
 /// Seals the certificate and writes it, its marks streamed from disk, to a temporary file
 /// beside `to` that is then renamed over it: a reader never sees half a certificate.
-fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<(), String> {
+fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<String, String> {
     let failed = |e: &dyn std::fmt::Display| format!("cannot write the certificate {}: {e}", to.display());
     let cert = cert.seal().map_err(|e| failed(&e))?;
     let dir = folder_of(to);
@@ -372,7 +426,7 @@ fn write_certificate(cert: Certificate<OnDisk>, to: &Path) -> Result<(), String>
     let file = out.into_inner().map_err(|e| failed(&e.into_error()))?;
     file.as_file().sync_all().map_err(|e| failed(&e))?;
     file.persist(to).map_err(|e| failed(&e.error))?;
-    Ok(())
+    Ok(cert.checksum)
 }
 
 /// The folder a file named by `path` is in (`.` for a bare name).

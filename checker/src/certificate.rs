@@ -104,6 +104,13 @@ pub struct Run {
     /// when it ran to the end.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+    /// The step this segment of a run started from, a restart file's; absent for 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub first_step: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,6 +133,10 @@ pub struct Certificate<M = Vec<Mark>> {
     pub verdicts: Vec<String>,
     /// The checksum of the state file written with this certificate, if one was.
     pub states_checksum: Option<String>,
+    /// For a run resumed from a restart file, the checksum of the certificate of the segment
+    /// before (`recheck::recheck_chain`); absent for a run from its start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub previous: Option<String>,
     /// FNV-1a 64 of the canonical JSON of the certificate with this field empty.
     pub checksum: String,
 }
@@ -186,8 +197,11 @@ impl Certificate {
                 ));
             }
         }
-        if !(c.run.dt.is_finite() && c.run.dt > 0.0) || c.run.steps > c.run.planned_steps {
-            return Err("run: dt must be finite and positive, steps at most planned_steps".into());
+        if !(c.run.dt.is_finite() && c.run.dt > 0.0)
+            || c.run.steps > c.run.planned_steps
+            || c.run.first_step > c.run.steps
+        {
+            return Err("run: dt must be finite and positive, first_step ≤ steps ≤ planned_steps".into());
         }
         Ok(c)
     }

@@ -7,7 +7,7 @@
 //! `Pass` has private fields and no constructor outside this module (LCF style).
 
 use crate::claims::ClaimKind;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Where an enclosure `[lo, hi]` of a deviation lies against its tolerance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,7 +100,7 @@ impl Pass {
 }
 
 /// A checkpoint where the deviation is certainly (`Fail`) or possibly (`Undecided`) too large.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Breach {
     pub claim: ClaimKind,
     pub step: u64,
@@ -137,6 +137,9 @@ impl Verdict {
     }
 }
 
+/// A claim's running summary: its checkpoints, the worst bound and tolerance of those within
+/// it, and the first it could not decide. A restart file carries it (`monitor::Carried`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Judge {
     claim: ClaimKind,
     checkpoints: u64,
@@ -150,6 +153,10 @@ impl Judge {
     pub fn new(claim: ClaimKind) -> Self {
         // A deviation may be negative (a distance inside its bounds): the bound starts at −∞.
         Judge { claim, checkpoints: 0, bound: f64::NEG_INFINITY, tol: 0.0, precision: BINARY64, undecided: None }
+    }
+
+    pub fn claim(&self) -> ClaimKind {
+        self.claim
     }
 
     /// Admits one checkpoint: `[lo, hi]` encloses the deviation, which must be ≤ `tol`;

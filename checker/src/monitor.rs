@@ -14,6 +14,7 @@ use crate::outward::Outward;
 use crate::quantities::{foresee, pair_reaches, Lifted, PairSum};
 use crate::states::State;
 use crate::terms::{Kind, Site};
+use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// Unit round-off of binary64.
@@ -65,6 +66,17 @@ struct Track {
 struct Reference {
     state: State,
     measures: Vec<Vec<Outward>>,
+}
+
+/// What a monitor carries from one checkpoint to the next, for a restart file: the reference
+/// state (its measures are evaluated again from it), each claim's running summary and
+/// round-off scale, and the energy ledger (t, the power's and the dissipated energy's bounds).
+/// Its numbers are bits, non-finite ones included (a summary's bound starts at −∞).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Carried {
+    pub reference: Option<State>,
+    pub judges: Vec<(Judge, f64)>,
+    pub ledger: Option<[f64; 5]>,
 }
 
 /// Where a run's marks go as they are made (the claim's index, the mark) instead of its
@@ -160,6 +172,44 @@ impl Monitor {
         let ahead = Arc::default();
         let (reference, ledger, sites, sink) = (None, None, vec![], None);
         Ok(Monitor { model, tracks, last_step, reference, balance, ledger, threads, ahead, sites, sink })
+    }
+
+    /// A monitor that goes on from where `carried` left one of the same model and claims (a
+    /// restart). The reference's measures are evaluated again: the same bits as the first time.
+    pub fn resumed(model: Model, claims: Vec<Claim>, last_step: u64, carried: Carried) -> Result<Self, String> {
+        let mut m = Monitor::new(model, claims, last_step)?;
+        let kinds = |j: &[(Judge, f64)]| j.iter().map(|j| j.0.claim()).collect::<Vec<_>>();
+        if kinds(&carried.judges) != m.tracks.iter().map(|t| t.claim.kind).collect::<Vec<_>>() {
+            return Err("its running summaries are of other claims than the scene's".into());
+        }
+        if let Some(r) = carried.reference {
+            m.model.check_state(&r.snapshot())?;
+            let q = Lifted::new(&m.model, &r.snapshot(), &Outward::NAN).on_threads(m.threads);
+            let measures = m.tracks.iter().map(|t| measure(&t.claim, &q, &m.model, &r.snapshot())).collect();
+            m.reference = Some(Reference { state: r, measures });
+        }
+        for (t, (judge, scale)) in m.tracks.iter_mut().zip(carried.judges) {
+            (t.judge, t.scale) = (judge, scale);
+        }
+        m.ledger = carried.ledger.map(|[t, p, q, d, e]| Ledger {
+            t,
+            power: Outward::from_bounds(p, q),
+            dissipated: Outward::from_bounds(d, e),
+        });
+        Ok(m)
+    }
+
+    /// What `resumed` needs to go on from here, or why a run cannot: a claim already failed.
+    pub fn carried(&self) -> Result<Carried, String> {
+        if let Some(t) = self.tracks.iter().find(|t| t.stopped.is_some()) {
+            return Err(format!("{} has failed: the run halted, and cannot go on", t.claim.kind.name()));
+        }
+        let ledger = self.ledger.as_ref().map(|l| {
+            let ((p, q), (d, e)) = (l.power.bounds(), l.dissipated.bounds());
+            [l.t, p, q, d, e]
+        });
+        let judges = self.tracks.iter().map(|t| (t.judge.clone(), t.scale)).collect();
+        Ok(Carried { reference: self.reference.as_ref().map(|r| r.state.clone()), judges, ledger })
     }
 
     /// Hands every mark to `sink` as it is made: the outcome's trails are then empty.

@@ -159,10 +159,18 @@ fn certificate() -> String {
         source_digest: "sha256:0".into(),
         model: m,
         claims,
-        run: Run { integrator: "velocity_verlet".into(), dt: 1.0, planned_steps: 1, steps: 1, stopped: None },
+        run: Run {
+            integrator: "velocity_verlet".into(),
+            dt: 1.0,
+            planned_steps: 1,
+            steps: 1,
+            stopped: None,
+            first_step: 0,
+        },
         trails: out.trails,
         verdicts: vec!["x".into()],
         states_checksum: None,
+        previous: None,
         checksum: String::new(),
     }
     .seal()

@@ -159,7 +159,7 @@ pub struct States {
 }
 
 /// One state, owned: what a state file holds, and what the kernel steps.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct State {
     pub step: u64,
     pub t: f64,

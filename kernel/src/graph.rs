@@ -272,6 +272,38 @@ impl LagrangianGraph {
         }
     }
 
+    /// Where each group's kept list was last built (`Force::built_at`), in the order of the
+    /// groups: a restart file's.
+    pub fn lists_built_at(&self) -> Vec<Option<Vec<[f64; 3]>>> {
+        self.groups.iter().map(|(_, g)| g.built_at()).collect()
+    }
+
+    /// Builds each group's list where `lists_built_at` said (before the first force evaluation
+    /// of a resumed run). The error is a restart that does not fit this graph.
+    pub fn build_lists_at(&self, at: &[Option<Vec<[f64; 3]>>]) -> Result<(), String> {
+        if at.len() != self.groups.len() {
+            return Err(format!("it holds lists for {} term groups, the scene has {}", at.len(), self.groups.len()));
+        }
+        for ((kind, g), x) in self.groups.iter().zip(at) {
+            match x {
+                Some(x) if x.len() != self.masses.len() => {
+                    return Err(format!(
+                        "its {} list has {} bodies, the scene {}",
+                        kind.name(),
+                        x.len(),
+                        self.masses.len()
+                    ))
+                }
+                Some(x) if x.iter().flatten().any(|c| !c.is_finite()) => {
+                    return Err(format!("its {} list was built at non-finite positions", kind.name()))
+                }
+                Some(x) => g.build_at(x),
+                None => {}
+            }
+        }
+        Ok(())
+    }
+
     /// How many times the kept lists have been built, in all (it changes when one is rebuilt).
     pub fn builds(&self) -> u64 {
         self.groups.iter().map(|(_, g)| g.builds()).sum()

@@ -186,7 +186,14 @@ impl Neighbours {
         }
     }
 
-    fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
+    /// The positions the list was last built at (empty before the first build): with them a
+    /// list rebuilt elsewhere (`build`) is this one, the same pairs in the same order.
+    pub fn built_at(&self) -> &[[f64; 3]] {
+        &self.at
+    }
+
+    /// Builds the list at positions `x` (a restart's `built_at`, or the state's).
+    pub fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
         let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
         self.at.clear();
         self.at.extend_from_slice(x);

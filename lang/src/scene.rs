@@ -93,7 +93,7 @@ pub struct Spans {
 
 /// `equilibrate`, `sample_every`, `tail_corrections` in the solver block: the observables are
 /// averaged over the states from time `equilibrate` on, every `every` steps.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sampling {
     pub equilibrate: f64,
     pub every: u64,

@@ -26,7 +26,7 @@ impl Thermostat {
 }
 
 /// The temperature a thermostat holds, over the degrees of freedom it thermalizes.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Bath {
     pub kt: f64,
     pub dof: f64,

@@ -136,6 +136,15 @@ impl<'s> Checking<'s> {
         }
     }
 
+    /// What the monitor carries to the next checkpoint (a restart's), from a monitor on the
+    /// kernel's thread: a run that writes restarts on its way judges inline.
+    pub fn carried(&self) -> Result<lagra_checker::monitor::Carried, String> {
+        match self {
+            Checking::Inline(m) => m.carried(),
+            Checking::Overlapped(_) => Err("the checker is on another thread".into()),
+        }
+    }
+
     /// The monitor, every verdict read, and overlapped, the CPU seconds the second thread spent
     /// judging (inline, that is the time `show` took).
     pub fn into_monitor(self) -> (Monitor, Option<f64>) {

@@ -8,6 +8,7 @@ pub mod grad;
 pub mod marks;
 pub mod observables;
 pub mod predict;
+pub mod restart;
 pub mod run;
 pub mod tail;
 pub mod thinned;

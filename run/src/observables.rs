@@ -64,7 +64,8 @@ pub struct Observables {
     pub notes: Vec<String>,
 }
 
-/// Gathers the samples along a run.
+/// Gathers the samples along a run (a restart file carries them).
+#[derive(Clone, Serialize, serde::Deserialize)]
 pub struct Observer {
     sampling: Sampling,
     /// The first step sampled: `equilibrate` in steps, rounded.

@@ -7,9 +7,11 @@ use lagra_checker::model::Model;
 use lagra_lang::prediction::{Prediction, PredictionKind};
 use lagra_lang::thermostat::Bath;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
-/// Measures a period along the trajectory.
+/// Measures a period along the trajectory (a restart file carries what it measured so far).
+#[derive(Clone, Serialize, Deserialize)]
 pub enum Meter {
     /// Upward zero crossings of the bond extension |r| − r₀.
     Crossings { i: usize, j: usize, r0: f64, last: Option<(f64, f64)>, first: Option<f64>, latest: f64, count: u64 },
@@ -162,7 +164,7 @@ impl Meter {
 }
 
 /// Counts the turns of a vector about a fixed normal, interpolating the time of each.
-#[derive(Default)]
+#[derive(Clone, Default, Serialize, Deserialize)]
 pub struct Winding {
     basis: Option<(Vector3<f64>, Vector3<f64>)>,
     angle: f64,

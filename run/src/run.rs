@@ -5,6 +5,7 @@
 use crate::checking::{can_overlap, Checking};
 use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
+use crate::restart::Restart;
 use crate::trace::Frames;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
@@ -27,6 +28,8 @@ pub enum Stop {
     Solver { step: u64, message: String },
     /// The caller asked the run to stop (`Options::stop`), here.
     Cancelled { step: u64 },
+    /// The run reached the step it was asked to stop at (`Options::until`), before its end.
+    Until { step: u64 },
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -67,6 +70,11 @@ pub struct Report {
     pub iterations: Option<Iterations>,
     /// The averages after `equilibrate` (a thermostatted scene, or one that asked).
     pub observables: Option<Observables>,
+    /// The step the run started from: 0, or a restart's.
+    pub first_step: u64,
+    /// Where it was asked for (`Options::restarts`), what goes on from the state reached, or
+    /// why the run cannot go on from there (it halted; its solver cannot be cut).
+    pub restart: Option<Result<Restart, String>>,
 }
 
 /// Keeps the states a run produces (the state file's writer).
@@ -92,12 +100,38 @@ pub struct Options<'a> {
     /// Where the checker's marks go (`crate::marks`); without it the outcome's trails hold
     /// them all, in memory, which grows with the run.
     pub marks: Option<MarkSink>,
+    /// Where the run starts from: a restart file's, in place of the scene's initial state.
+    pub resume: Option<Restart>,
+    /// Stops the run at this step (`Stop::Until`) if it comes before the end.
+    pub until: Option<u64>,
+    /// What goes on from the state reached is made at the end of the run (`Report::restart`),
+    /// and every so many steps on the way, handed to the writer.
+    pub restarts: Option<Restarts<'a>>,
+}
+
+/// Restart files made along a run, besides the one at its end.
+pub struct Restarts<'a> {
+    /// Every this many steps (never: `u64::MAX`); the checker then judges on the kernel's thread.
+    pub every: u64,
+    pub write: &'a mut dyn FnMut(Restart) -> Result<(), String>,
 }
 
 impl Options<'_> {
     /// A run of `steps` (the scene's if `None`) on one thread, with nothing attached.
     pub fn plain(steps: Option<u64>) -> Self {
-        Options { steps, trace: None, record: None, threads: 1, progress: None, stop: None, watch: None, marks: None }
+        Options {
+            steps,
+            trace: None,
+            record: None,
+            threads: 1,
+            progress: None,
+            stop: None,
+            watch: None,
+            marks: None,
+            resume: None,
+            until: None,
+            restarts: None,
+        }
     }
 }
 /// A look at the state every `every` steps.
@@ -133,16 +167,39 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);
     let dt = scene.solver.dt;
     let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
-    let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), steps)?;
+    let (model, claims) = (scene.model.clone(), scene.claims.clone());
+    // a restart's state and everything carried with it, or the scene's start
+    let (mut state, mut monitor, mut observer, mut meters, carried) = match opts.resume.take() {
+        None => {
+            let meters: Vec<(Meter, &Prediction)> =
+                scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, scene.bath()), p)).collect();
+            let observer = Observer::new(scene, &graph, steps)?;
+            (lagra_kernel::setup::start(scene), Monitor::new(model, claims, steps)?, observer, meters, None)
+        }
+        Some(r) => {
+            let fits = |e: String| format!("the restart does not fit this scene: {e}");
+            scene.model.check_state(&r.state.snapshot()).map_err(fits)?;
+            if r.meters.len() != scene.predictions.len() || r.observer.is_some() != scene.sampling.is_some() {
+                return Err(fits("it measures other predictions or observables".into()));
+            }
+            if r.state.step > steps {
+                return Err(format!("the restart is at step {}, past the run's end at step {steps}", r.state.step));
+            }
+            graph.build_lists_at(&r.lists).map_err(fits)?;
+            let monitor = Monitor::resumed(model, claims, steps, r.monitor).map_err(fits)?;
+            (r.state, monitor, r.observer, r.meters.into_iter().zip(&scene.predictions).collect(), Some(r.solver))
+        }
+    };
     if let Some(sink) = opts.marks.take() {
         monitor.hand_marks_to(sink);
     }
-    let mut state = lagra_kernel::setup::start(&scene);
-    let mut observer = Observer::new(scene, &graph, steps)?;
-    let mut meters: Vec<(Meter, &Prediction)> =
-        scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, scene.bath()), p)).collect();
+    let first_step = state.step;
+    let end = opts.until.map_or(steps, |u| u.clamp(first_step, steps));
+    let mut restarts = opts.restarts.take();
+    let every_restart = restarts.as_ref().map_or(u64::MAX, |r| r.every.max(1));
     let tracing = opts.trace.is_some();
-    let watched = tracing || opts.record.is_some() || !meters.is_empty();
+    // (a restart made on the way takes the monitor from the kernel's thread)
+    let watched = tracing || opts.record.is_some() || !meters.is_empty() || every_restart != u64::MAX;
     let overlap = can_overlap(&scene.model, &scene.claims, watched);
 
     let start = Instant::now();
@@ -170,9 +227,13 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // the kernel's thread's time on the checker, added up by `check` and the last settle
     let waited = std::cell::Cell::new(0.0);
     let judged = |since: Instant| waited.set(waited.get() + since.elapsed().as_secs_f64());
-    let mut check = |checking: &mut Checking, s: &mut State| -> Result<Option<Stop>, String> {
+    // (a resumed run's first state was judged by the run that wrote the restart: recorded only)
+    let mut check = |checking: &mut Checking, s: &mut State, judge: bool| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
+        }
+        if !judge {
+            return Ok(None);
         }
         let judging = Instant::now();
         let shown = checking.show(s);
@@ -186,6 +247,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
     let mut iterations = None;
+    let mut solver_carried = Err("the solver could not start".to_string());
     let (monitor, busy) = std::thread::scope(|scope| -> Result<(Monitor, Option<f64>), String> {
         let mut checking = if overlap {
             Checking::overlapped(scope, monitor, &scene.claims, steps)
@@ -195,18 +257,26 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         match Stepper::for_scene(scene, &graph, &state) {
             Err(e) => stop = Some(Stop::Solver { step: 0, message: e.to_string() }),
             Ok(mut solver) => {
-                stop = check(&mut checking, &mut state)?;
-                meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-                trace(&state, solver.potential())?;
                 let sample =
                     |o: &mut Option<Observer>, s: &State, potential: f64| match o.as_mut().filter(|o| o.due(s.step)) {
                         Some(o) => o.observe(&graph, s, potential),
                         None => Ok(()),
                     };
-                sample(&mut observer, &state, solver.potential())?;
+                match &carried {
+                    Some(c) => {
+                        solver.take_up(c, &graph).map_err(|e| format!("the restart: {e}"))?;
+                        check(&mut checking, &mut state, false)?;
+                    }
+                    None => {
+                        stop = check(&mut checking, &mut state, true)?;
+                        meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
+                        sample(&mut observer, &state, solver.potential())?;
+                    }
+                }
+                trace(&state, solver.potential())?;
                 let frame = scene.solver.steps_per_frame.max(1);
                 let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
-                while stop.is_none() && state.step < steps {
+                while stop.is_none() && state.step < end {
                     let next_frame = if tracing { next(frame, state.step) } else { u64::MAX };
                     let next_look = watch.as_ref().map_or(u64::MAX, |w| next(w.every.max(1), state.step));
                     let until = if every_step {
@@ -214,13 +284,13 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     } else {
                         let sampled = observer.as_ref().map_or(u64::MAX, |o| o.next_due(state.step));
                         let due = checking.next_due(state.step).min(next_frame).min(next_look);
-                        due.min(next(stride, state.step)).min(sampled)
+                        due.min(next(stride, state.step)).min(sampled).min(next(every_restart, state.step))
                     };
-                    if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(steps)) {
+                    if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(end)) {
                         stop = Some(Stop::Solver { step: state.step + 1, message: e.to_string() });
                         break;
                     }
-                    stop = check(&mut checking, &mut state)?;
+                    stop = check(&mut checking, &mut state, true)?;
                     if stop.is_none() && !solver.potential().is_finite() {
                         stop = non_finite(&state);
                     }
@@ -240,11 +310,21 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     if stop.is_none() && cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
                         stop = Some(Stop::Cancelled { step: state.step });
                     }
+                    let on_the_way = state.step.is_multiple_of(every_restart) && state.step < end;
+                    if let Some(r) = restarts.as_mut().filter(|_| stop.is_none() && on_the_way) {
+                        let made =
+                            carry(&state, steps, solver.carried(), &graph, checking.carried(), &observer, &meters);
+                        (r.write)(made?)?;
+                    }
                 }
                 if stop.is_none() {
                     stop = non_finite(&state);
                 }
+                if stop.is_none() && state.step < steps {
+                    stop = Some(Stop::Until { step: state.step });
+                }
                 iterations = solver.iterations().cloned();
+                solver_carried = solver.carried();
             }
         }
         // a breach at the checkpoint still being judged came first
@@ -274,6 +354,11 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             Measured { name: p.kind.name(), predicted: p.predicted, measured, rel_diff, tol: p.tol, agrees, detail }
         })
         .collect();
+    let restart = restarts.map(|_| match &stop {
+        Some(Stop::Checker(h)) => Err(format!("the run {h}, and cannot go on")),
+        Some(Stop::Solver { step, message }) => Err(format!("the solver failed at step {step} ({message})")),
+        _ => carry(&state, steps, solver_carried, &graph, monitor.carried(), &observer, &meters),
+    });
     let plan = graph.plan();
     Ok(Report {
         planned_steps: steps,
@@ -293,5 +378,30 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         },
         iterations,
         observables: observer.and_then(Observer::finish),
+        first_step,
+        restart,
+    })
+}
+
+/// What goes on from state `s` (the front names its scene and certificate).
+fn carry(
+    s: &State,
+    planned_steps: u64,
+    solver: Result<lagra_kernel::solvers::Carried, String>,
+    graph: &LagrangianGraph,
+    monitor: Result<lagra_checker::monitor::Carried, String>,
+    observer: &Option<Observer>,
+    meters: &[(Meter, &Prediction)],
+) -> Result<Restart, String> {
+    Ok(Restart {
+        scene: String::new(),
+        planned_steps,
+        state: s.clone(),
+        solver: solver?,
+        lists: graph.lists_built_at(),
+        monitor: monitor?,
+        observer: observer.clone(),
+        meters: meters.iter().map(|m| m.0.clone()).collect(),
+        certificate: None,
     })
 }

@@ -15,7 +15,7 @@ use lagra_kernel::derivatives::exact::along;
 use serde::Serialize;
 
 /// Per body of energy, and of pressure, at the model's density.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Tail {
     pub energy_per_body: f64,
     pub pressure: f64,

@@ -225,6 +225,7 @@ fn run_scene(server: &Server, args: &Value, token: Option<&Value>, cancel: &Atom
         watch: None,
         // the answer is the summary: the marks are not kept
         marks: Some(lagra_run::marks::dropped()),
+        ..Options::plain(steps)
     };
     let rep = lagra_run::run::run(scene, opts)?;
     let summary: report::Summary = run::summarize(&path, &prepared, &rep, threads, false);

@@ -153,6 +153,13 @@ pub trait Force: Send + Sync {
         None
     }
     fn restore(&self, _kept: &Kept) {}
+    /// The positions the group's kept list was last built at, if it keeps one that has been
+    /// built: what a restart file holds so that the run resumed from it sums the same pairs in
+    /// the same order (`build_at`).
+    fn built_at(&self) -> Option<Vec<[f64; 3]>> {
+        None
+    }
+    fn build_at(&self, _x: &[[f64; 3]]) {}
     /// How many times the group's kept list has been built.
     fn builds(&self) -> u64 {
         0

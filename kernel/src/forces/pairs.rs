@@ -412,6 +412,15 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             *l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = saved.clone();
         }
     }
+    fn built_at(&self) -> Option<Vec<[f64; 3]>> {
+        let l = self.list.as_ref()?.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        (!l.built_at().is_empty()).then(|| l.built_at().to_vec())
+    }
+    fn build_at(&self, x: &[[f64; 3]]) {
+        if let Some(l) = &self.list {
+            l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).build(x, &self.cell, self.pool.as_deref());
+        }
+    }
     fn builds(&self) -> u64 {
         self.list.as_ref().map_or(0, |l| l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).builds)
     }

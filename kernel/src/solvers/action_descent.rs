@@ -27,7 +27,7 @@
 //! so total momentum is kept to rounding whatever the residual. The forces and potential
 //! reported are evaluated at each state delivered.
 
-use super::{Evaluated, Failure, Iterations, Settings, Solver, Window};
+use super::{Carried, Evaluated, Failure, Iterations, Settings, Solver, Window};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 use crate::step::tick;
@@ -153,6 +153,14 @@ impl Solver for ActionDescent {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn carried(&self) -> Result<Carried, String> {
+        Err("action descent solves windows of steps ahead, which a restart file does not hold yet".into())
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 
     /// Takes the solved states up to `until`, evaluating the forces at that one only.

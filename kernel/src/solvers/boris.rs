@@ -10,7 +10,7 @@
 //! the classic sequence exactly (…K R K D K R K D…), shifted by half a rotation; symmetric, so
 //! second order and time-reversible.
 
-use super::{Evaluated, Failure, Solver};
+use super::{Carried, Evaluated, Failure, Solver};
 use crate::forces::{cross, Singularity};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
@@ -78,6 +78,10 @@ impl Solver for Boris {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 }
 

@@ -14,7 +14,7 @@
 //! π = I Rᵀω. It is not AVBD (Chen et al. 2024), the primal block descent the design names:
 //! that is the next step; this dual solver is the one users of Box2D, Bullet and PhysX know.
 
-use super::{Evaluated, Failure, Iterations, Solver};
+use super::{Carried, Evaluated, Failure, Iterations, Solver};
 use crate::contact::{Pose, Solids, Touch};
 use crate::graph::LagrangianGraph;
 use crate::rigid;
@@ -198,6 +198,23 @@ impl Solver for Impulses {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    /// The forces and the warm starts, pairs in order (the map's own order is arbitrary).
+    fn carried(&self) -> Result<Carried, String> {
+        let mut warm: Vec<_> = self
+            .warm
+            .iter()
+            .map(|(&pair, w)| (pair, w.iter().map(|(place, j)| ((*place).into(), *j)).collect()))
+            .collect();
+        warm.sort_by_key(|w: &((usize, usize), Vec<_>)| w.0);
+        Ok(Carried { warm, ..Carried::forces(&self.at) })
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
+        let place = |w: &[([f64; 3], [f64; 3])]| w.iter().map(|(p, j)| (V::from(*p), *j)).collect();
+        self.warm = c.warm.iter().map(|(pair, w)| (*pair, place(w))).collect();
     }
 
     fn rotates(&self) -> bool {

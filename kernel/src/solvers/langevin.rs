@@ -4,7 +4,7 @@
 //! O(dt²) and better than the other splittings'. Each ξ is drawn for (seed, step, body, axis)
 //! alone, so the run is the same bits on any number of threads.
 
-use super::{implicit_kick, Evaluated, Failure, Solver};
+use super::{implicit_kick, Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 use lagra_lang::random::normal;
@@ -40,5 +40,9 @@ impl Solver for Baoab {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 }

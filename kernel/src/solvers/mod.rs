@@ -22,7 +22,7 @@ use crate::step::tick;
 use lagra_lang::integrator::{Integrator, Settings};
 use lagra_lang::thermostat::Thermostat;
 use lagra_lang::Scene;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// Why a step could not be taken.
@@ -103,6 +103,27 @@ impl Iterations {
     }
 }
 
+/// What a solver carries from one step to the next besides the state, exactly: a restart
+/// file's, so that a run resumed from it is the same bits as the run that wrote it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Carried {
+    /// The forces and potential at the state (what the next step's first kick uses).
+    pub forces: Vec<[f64; 3]>,
+    pub potential: f64,
+    /// Sequential impulses' warm starts: each touching pair's impulses (normal, two tangents)
+    /// by place, in the order of the pairs.
+    pub warm: Vec<((usize, usize), Vec<([f64; 3], [f64; 3])>)>,
+}
+
+impl Carried {
+    pub(crate) fn forces(at: &Evaluated) -> Carried {
+        Carried { forces: at.f.clone(), potential: at.potential, warm: vec![] }
+    }
+    pub(crate) fn evaluated(&self) -> Evaluated {
+        Evaluated { f: self.forces.clone(), potential: self.potential }
+    }
+}
+
 /// One integrator at work.
 pub trait Solver {
     /// One step of `dt` (positions and velocities; the caller ticks the clock).
@@ -130,6 +151,13 @@ pub trait Solver {
     fn rotates(&self) -> bool {
         false
     }
+    /// What it carries to the next step besides the state (`Carried`), or why it cannot be
+    /// cut here.
+    fn carried(&self) -> Result<Carried, String> {
+        Ok(Carried::forces(self.evaluated()))
+    }
+    /// Takes up what `carried` gave, at the state it was given at.
+    fn take_up(&mut self, c: &Carried);
 }
 
 /// The integrator a scene chose, at work on a graph.
@@ -184,6 +212,32 @@ impl Stepper {
     /// saved state: the same bits as the run that saved it).
     pub fn resume_verlet(at: Evaluated) -> Self {
         Stepper { solver: Box::new(velocity_verlet::VelocityVerlet { at }) }
+    }
+
+    /// What the solver carries to the next step besides the state (a restart file's), or why
+    /// it cannot be cut here.
+    pub fn carried(&self) -> Result<Carried, String> {
+        self.solver.carried()
+    }
+
+    /// Takes up what a solver of the same scene carried at state `s`, where this one was just
+    /// made (`for_scene`, its lists built where the carrying run's were). Forces that depend on
+    /// positions alone must come out the bits this kernel computed at `s`: otherwise the
+    /// restart was written by a kernel with other arithmetic, and the run would not be the one
+    /// it continues.
+    pub fn take_up(&mut self, c: &Carried, g: &LagrangianGraph) -> Result<(), String> {
+        let now = self.solver.evaluated();
+        if c.forces.len() != now.f.len() {
+            return Err(format!("it holds forces on {} bodies, the scene has {}", c.forces.len(), now.f.len()));
+        }
+        let bits = |f: &[[f64; 3]]| f.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+        if !g.velocity_dependent() && bits(&c.forces) != bits(&now.f) {
+            return Err("its forces are not the ones this kernel computes at its state: it was written by \
+                        another version of lagra, or edited"
+                .into());
+        }
+        self.solver.take_up(c);
+        Ok(())
     }
 
     /// The forces and potential at the current state.

@@ -3,7 +3,7 @@
 //! H′ = H + the chain's share is conserved to O(dt²), and the checker certifies it.
 
 use super::velocity_verlet::VelocityVerlet;
-use super::{Evaluated, Failure, Solver};
+use super::{Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 use crate::step::{kick_drift, tick};
@@ -25,6 +25,10 @@ impl Solver for NoseHoover {
 
     fn evaluated(&self) -> &Evaluated {
         &self.vv.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.vv.at = c.evaluated();
     }
 
     /// With conservative forces, the steps before the last evaluate the forces only (no one

@@ -6,7 +6,7 @@
 //! Verlet, and they do no work, so the energy claim holds with them. Without constraints it is
 //! velocity Verlet.
 
-use super::{implicit_kick, Evaluated, Failure, Iterations, Solver};
+use super::{implicit_kick, Carried, Evaluated, Failure, Iterations, Solver};
 use crate::constraints::Tolerance;
 use crate::graph::LagrangianGraph;
 use crate::state::State;
@@ -50,6 +50,10 @@ impl Solver for Rattle {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 
     fn iterations(&self) -> Option<&Iterations> {

@@ -2,7 +2,7 @@
 //! but its energy error drifts secularly, and it conserves linear momentum only (not angular
 //! momentum) exactly.
 
-use super::{Evaluated, Failure, Solver};
+use super::{Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 
@@ -50,5 +50,9 @@ impl Solver for Rk4 {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 }

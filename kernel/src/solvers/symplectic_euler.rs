@@ -8,7 +8,7 @@
 //! v₁ = v₀ + dt·F(x₀, v₁)/m (a fixed point, as velocity Verlet's closing kick), so a damping
 //! removes energy at the velocity it acts on.
 
-use super::{implicit_kick, Evaluated, Failure, Solver};
+use super::{implicit_kick, Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 
@@ -30,5 +30,9 @@ impl Solver for SymplecticEuler {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 }

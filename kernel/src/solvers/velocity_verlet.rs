@@ -7,7 +7,7 @@
 //! at the velocity of its own end of the step. Evaluating the damping at the half-step velocity
 //! instead would lag it by ½dt and make the dissipated energy first-order wrong.
 
-use super::{implicit_kick, Evaluated, Failure, Solver};
+use super::{implicit_kick, Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 use crate::step::{kick_drift, tick, Stride};
@@ -31,6 +31,10 @@ impl Solver for VelocityVerlet {
 
     fn evaluated(&self) -> &Evaluated {
         &self.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.at = c.evaluated();
     }
 
     /// With conservative forces the closing kick of one step, the opening kick of the next and

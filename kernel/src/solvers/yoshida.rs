@@ -4,7 +4,7 @@
 //! exact arithmetic, energy error bounded, now O(dt⁴).
 
 use super::velocity_verlet::VelocityVerlet;
-use super::{Evaluated, Failure, Solver};
+use super::{Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 
@@ -26,5 +26,9 @@ impl Solver for Yoshida4 {
 
     fn evaluated(&self) -> &Evaluated {
         &self.vv.at
+    }
+
+    fn take_up(&mut self, c: &Carried) {
+        self.vv.at = c.evaluated();
     }
 }
