@@ -1,4 +1,4 @@
-//! `lagra check CERTIFICATE [--states FILE] [--scene FILE]`.
+//! `lagra check CERTIFICATE... [--states FILE]... [--scene FILE]`.
 
 use lagra_checker::certificate::Certificate;
 use lagra_run::compile;
@@ -8,11 +8,14 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The certificate `lagra run --certificate` wrote.
-    certificate: PathBuf,
-    /// The state file `lagra run --states` wrote: every enclosure is then evaluated again.
+    /// The certificate `lagra run --certificate` wrote; for a run resumed from restart files,
+    /// every segment's certificate, in order (re-checked as one run).
+    #[arg(required = true, num_args = 1..)]
+    certificate: Vec<PathBuf>,
+    /// The state file `lagra run --states` wrote: every enclosure is then evaluated again (one
+    /// per certificate, in the same order).
     #[arg(long, value_name = "FILE")]
-    states: Option<PathBuf>,
+    states: Vec<PathBuf>,
     /// The scene source: the certificate must be of this exact source, its model and claims
     /// those the source compiles to (catches a certificate edited and re-sealed).
     #[arg(long, value_name = "FILE")]
@@ -20,12 +23,20 @@ pub struct Args {
 }
 
 pub fn main(a: Args) -> ExitCode {
-    let r = lagra_checker::cli::check(&a.certificate, a.states.as_deref());
+    if !a.states.is_empty() && a.states.len() != a.certificate.len() {
+        eprintln!(
+            "lagra: {} state files for {} certificates: one per certificate, in order",
+            a.states.len(),
+            a.certificate.len()
+        );
+        return ExitCode::from(2);
+    }
+    let r = lagra_checker::cli::check_chain(&paths(&a.certificate), &paths(&a.states));
     print!("{}", r.stdout);
     eprint!("{}", r.stderr);
     let mut code = r.code;
     if let (Some(scene), 0 | 1) = (&a.scene, code) {
-        match of_scene(&a.certificate, scene) {
+        match a.certificate.iter().try_for_each(|c| of_scene(c, scene)) {
             Ok(()) => println!("scene       {} compiles to the certified model and claims", scene.display()),
             Err(why) => {
                 println!("scene       DISAGREES: {why}");
@@ -57,4 +68,8 @@ fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
         return Err("the certified claims are not the ones the source declares".into());
     }
     Ok(())
+}
+
+fn paths(v: &[PathBuf]) -> Vec<&std::path::Path> {
+    v.iter().map(PathBuf::as_path).collect()
 }

@@ -1,7 +1,7 @@
 //! The re-check as a command: `lagra-check` and `lagra check` both print this.
 
 use crate::certificate::Certificate;
-use crate::recheck::recheck;
+use crate::recheck::recheck_chain;
 use crate::states::States;
 use std::fmt::Write;
 use std::io::Read;
@@ -14,11 +14,15 @@ pub struct Report {
     pub code: u8,
 }
 
-pub const USAGE: &str = "usage: lagra-check CERTIFICATE [--states FILE]
+pub const USAGE: &str = "usage: lagra-check CERTIFICATE... [--states FILE]...
 
 Re-derives every verdict of a Lagra certificate without the kernel. With --states (the exact
 states `lagra run --states` wrote), every enclosure is evaluated again; without, the decision is
 made again over the enclosures the certificate records.
+
+A run cut into segments (`lagra run --resume`) is re-checked as one run: name every segment's
+certificate in order, and with --states every segment's state file, in the same order. The
+segments must link up: each names the checksum of the one before and starts where it stopped.
 
 Exit status: 0 the re-derivation agrees with the certificate and every claim PASSed; 1 it
 disagrees, or a claim did not PASS; 2 a file is missing, malformed, or does not fit the other.";
@@ -38,33 +42,55 @@ fn read(p: &Path, var: &str, limit: u64) -> Result<Vec<u8>, String> {
     }
 }
 
+/// The re-check of one certificate, with its state file if given.
 pub fn check(cert: &Path, states: Option<&Path>) -> Report {
+    check_chain(&[cert], states.as_slice())
+}
+
+/// The re-check of the certificates of a run's segments, in order (one for a run in one
+/// piece), with one state file each or none.
+pub fn check_chain(certs: &[&Path], states: &[&Path]) -> Report {
     let bad = |msg: String| Report { stdout: String::new(), stderr: format!("lagra-check: {msg}\n"), code: 2 };
-    let text = match read(cert, "LAGRA_MAX_CERTIFICATE_BYTES", 1 << 30).map(String::from_utf8) {
-        Ok(Ok(t)) => t,
-        Ok(Err(_)) => return bad(format!("cannot read {}: not UTF-8 text", cert.display())),
-        Err(e) => return bad(format!("cannot read {}: {e}", cert.display())),
-    };
-    let c = match Certificate::read(&text) {
-        Ok(c) => c,
-        Err(e) => return bad(format!("{}: {e}", cert.display())),
-    };
-    let s = match states.map(|p| read(p, "LAGRA_MAX_STATES_BYTES", 16 << 30).and_then(States::read).map(|s| (p, s))) {
-        None => None,
-        Some(Ok(s)) => Some(s),
-        Some(Err(e)) => return bad(format!("{}: {e}", states.map(|p| p.display().to_string()).unwrap_or_default())),
-    };
-    let r = match recheck(&c, s.as_ref().map(|s| &s.1)) {
-        Ok(r) => r,
-        Err(e) => return bad(format!("{}: {e}", cert.display())),
-    };
-    let mut out = String::new();
-    let _ = writeln!(out, "certificate {} ({}, scene {}, {})", cert.display(), c.format, c.scene, c.source_digest);
-    let _ = match &s {
-        Some((p, s)) => {
-            writeln!(out, "evidence    {} states from {}: every enclosure re-evaluated", s.count, p.display())
+    let mut chain = vec![];
+    for cert in certs {
+        let text = match read(cert, "LAGRA_MAX_CERTIFICATE_BYTES", 1 << 30).map(String::from_utf8) {
+            Ok(Ok(t)) => t,
+            Ok(Err(_)) => return bad(format!("cannot read {}: not UTF-8 text", cert.display())),
+            Err(e) => return bad(format!("cannot read {}: {e}", cert.display())),
+        };
+        match Certificate::read(&text) {
+            Ok(c) => chain.push(c),
+            Err(e) => return bad(format!("{}: {e}", cert.display())),
         }
-        None => writeln!(
+    }
+    let mut files = vec![];
+    for p in states {
+        match read(p, "LAGRA_MAX_STATES_BYTES", 16 << 30).and_then(States::read) {
+            Ok(s) => files.push(s),
+            Err(e) => return bad(format!("{}: {e}", p.display())),
+        }
+    }
+    let named = certs.iter().map(|c| c.display().to_string()).collect::<Vec<_>>().join(", ");
+    let r = match recheck_chain(&chain, (!states.is_empty()).then_some(files.as_slice())) {
+        Ok(r) => r,
+        Err(e) => return bad(format!("{named}: {e}")),
+    };
+    let Some(c) = chain.last() else { return bad("no certificate given".into()) };
+    let mut out = String::new();
+    let _ = writeln!(out, "certificate {named} ({}, scene {}, {})", c.format, c.scene, c.source_digest);
+    if chain.len() > 1 {
+        let _ = writeln!(
+            out,
+            "chain       {} segments, steps 0..={}, each continuing the one before",
+            chain.len(),
+            c.run.steps
+        );
+    }
+    let count: u64 = files.iter().map(|s| s.count).sum();
+    let from = states.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+    let _ = match states.is_empty() {
+        false => writeln!(out, "evidence    {count} states from {from}: every enclosure re-evaluated"),
+        true => writeln!(
             out,
             "evidence    none: the decision re-derived from the recorded enclosures (--states re-evaluates them)"
         ),
