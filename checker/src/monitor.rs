@@ -654,6 +654,44 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// A monitor cut at any step and resumed from what it carried makes the marks and verdicts of the one never cut: the
+        /// reference's measures, the summaries, the round-off scales and the ledger come back.
+        #[test]
+        fn a_resumed_monitor_is_the_unbroken_one(
+            claims in proptest::collection::vec((0usize..4, 1u64..7), 1..4),
+            damping in proptest::sample::select(vec![0.0, 0.5]),
+            last in 1u64..30,
+            cut in 0u64..30,
+        ) {
+            let cut = cut % last;
+            let kinds = [ClaimKind::EnergyConservation, ClaimKind::MomentumConservation,
+                ClaimKind::AngularMomentumConservation, ClaimKind::DimensionalConsistency];
+            let claims: Vec<Claim> = claims.iter().map(|&(k, every)| claim(kinds[k], (k == 0).then_some(1e-3), every)).collect();
+            let mut damped = model();
+            damped.terms[0].params[2] = damping;
+            let show = |m: &mut Monitor, step: u64| {
+                let (x, v) = ([[0.0; 3], [1.5 + 1e-3 * (step as f64).sin(), 0.0, 0.0]], [[1.0, 0.1, 0.0], [0.0; 3]]);
+                let _ = m.observe(&Snapshot { step, t: 0.1 * step as f64, x: &x, v: &v, chain: &[], spin: &[] });
+            };
+            let mut whole = Monitor::new(damped.clone(), claims.clone(), last).unwrap();
+            (0..=last).for_each(|k| show(&mut whole, k));
+            let mut first = Monitor::new(damped.clone(), claims.clone(), last).unwrap();
+            (0..=cut).for_each(|k| show(&mut first, k));
+            let Ok(carried) = first.carried() else { return Ok(()) };
+            let mut second = Monitor::resumed(damped, claims, last, carried).unwrap();
+            (cut + 1..=last).for_each(|k| show(&mut second, k));
+            let (a, b) = (whole.finish(), (first.finish(), second.finish()));
+            let joined: Vec<Vec<Mark>> =
+                b.0.trails.iter().zip(&b.1.trails).map(|(p, q)| [p.marks.clone(), q.marks.clone()].concat()).collect();
+            let same = |x: &Mark, y: &Mark| x.same(y);
+            for (t, j) in a.trails.iter().zip(&joined) {
+                proptest::prop_assert!(t.marks.len() == j.len() && t.marks.iter().zip(j).all(|(x, y)| same(x, y)));
+            }
+            proptest::prop_assert_eq!(format!("{:?}", a.verdicts), format!("{:?}", b.1.verdicts));
+        }
+    }
+
     #[test]
     fn next_checkpoint_is_the_next_on_a_small_domain() {
         for every in 1..=12 {
