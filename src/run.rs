@@ -114,7 +114,12 @@ disagreed or could not be measured, or the run halted (a singular force, an iter
 non-finite state); 2 bad input (the scene, a file, an argument); 130 or 143 stopped by SIGINT or SIGTERM \
 (128 + the signal, as a shell reports it): the run stops at its next look at the flag (about every 10^6 \
 atom-steps), the claims are judged up to the state reached, and the certificate (its `run.stopped` says \
-why) and the other files are written as at the end of a run; a second SIGINT ends the process at once."
+why) and the other files are written as at the end of a run, a restart file too with --restart; a second \
+SIGINT ends the process at once. A run stopped by --until exits as its verdicts so far say (a claim not yet \
+due is UNDECIDED: 1).\n\n\
+Restart files: --restart FILE is written at the end, at a signal or --until, and every --restart-every N \
+steps; --resume FILE continues from it to the same bits as the run never stopped. A run cut into segments \
+is certified in segments whose certificates chain (`lagra-check C1 C2 C3`)."
 }
 
 /// Bad input: the message on stderr, exit code 2.
