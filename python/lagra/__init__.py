@@ -205,14 +205,21 @@ class Scene:
         progress: bool = False,
         callback: Optional[Callable[[int, dict], None]] = None,
         every: Optional[int] = None,
+        restart: Optional[str] = None,
+        resume: Optional[str] = None,
+        until: Optional[int] = None,
     ) -> Result:
         """Runs the scene (its own length and time step unless given). `progress=True` shows a
         bar on stderr; `callback(step, state)` is called every `every` steps (default: every
         frame) with the state's time, positions and velocities. The GIL is released while it
-        runs; Ctrl-C raises KeyboardInterrupt after stopping the run cleanly."""
+        runs; Ctrl-C raises KeyboardInterrupt after stopping the run cleanly.
+
+        `restart="r.bin"` writes a restart file where the run ends or stops (Ctrl-C, `until`);
+        `resume="r.bin"` continues the run it holds, to the same bits as if it had never
+        stopped (`lagra run --restart/--resume/--until`). The frames are then the segment's."""
         bar = _Bar(steps if steps is not None else self.steps) if progress else None
         try:
-            run = self._s._run(steps, dt, threads, frame_every, bar, callback, every)
+            run = self._s._run(steps, dt, threads, frame_every, bar, callback, every, restart, resume, until)
         finally:
             if bar is not None:
                 bar.close()

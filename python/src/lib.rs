@@ -10,7 +10,8 @@ use lagra_checker::model::Cell;
 use lagra_kernel::state::State;
 use lagra_lang::params::apply_settings;
 use lagra_run::marks::Spill;
-use lagra_run::run::{run, Options, Watch};
+use lagra_run::restart::Restart;
+use lagra_run::run::{run, Options, Restarts, Watch};
 use lagra_run::thinned::Kept;
 use lagra_run::trace::{Format, Recorded, Writer};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -18,6 +19,7 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
@@ -29,6 +31,8 @@ create_exception!(_lagra, SceneError, PyValueError, "A scene that does not compi
 struct PyScene {
     prepared: Prepared,
     path: String,
+    /// `sha256:` and the digest of the source, which a restart file must name.
+    digest: String,
 }
 
 fn scene_error(e: impl Into<String>) -> PyErr {
@@ -76,7 +80,8 @@ impl PyScene {
     #[pyo3(signature = (text, path = "<string>"))]
     fn from_str(text: &str, path: &str) -> PyResult<Self> {
         let prepared = prepare(text, path, &[], None).map_err(scene_error)?;
-        Ok(PyScene { prepared, path: path.into() })
+        let digest: String = Sha256::digest(text.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+        Ok(PyScene { prepared, path: path.into(), digest: format!("sha256:{digest}") })
     }
 
     #[staticmethod]
@@ -204,7 +209,7 @@ impl PyScene {
     }
 
     /// Runs the scene; the report is `lagra run --json`'s document.
-    #[pyo3(signature = (steps=None, dt=None, threads=None, frame_every=None, progress=None, callback=None, callback_every=None))]
+    #[pyo3(signature = (steps=None, dt=None, threads=None, frame_every=None, progress=None, callback=None, callback_every=None, restart=None, resume=None, until=None))]
     #[allow(clippy::too_many_arguments)]
     fn _run(
         &self,
@@ -216,7 +221,14 @@ impl PyScene {
         progress: Option<Py<PyAny>>,
         callback: Option<Py<PyAny>>,
         callback_every: Option<u64>,
+        restart: Option<PathBuf>,
+        resume: Option<PathBuf>,
+        until: Option<u64>,
     ) -> PyResult<PyRun> {
+        let resumed = resume
+            .map(|p| Restart::read(&p).and_then(|r| r.belongs_to(&self.digest).map(|_| r)))
+            .transpose()
+            .map_err(|e| scene_error(format!("resume: {e}")))?;
         let mut prepared = self.prepared.clone();
         if let Some(dt) = dt {
             prepared.scene.solver.dt = positive("dt", dt)?;
@@ -238,6 +250,8 @@ impl PyScene {
         let marks =
             Spill::new(prepared.scene.claims.len(), None, true).map_err(|e| PyValueError::new_err(e.to_string()))?;
         let scene = &prepared.scene;
+        let mut unused = |_: Restart| Ok(());
+        let restarts = restart.is_some().then(|| Restarts { every: u64::MAX, write: &mut unused });
         let outcome = py.detach(|| {
             // Ctrl-C is seen here, and the progress function called, about every 10⁶ atom-steps
             let mut tick = |step: u64| {
@@ -272,9 +286,24 @@ impl PyScene {
                 stop: Some(&stop),
                 watch,
                 marks: Some(marks.sink()),
+                resume: resumed,
+                until,
+                restarts,
             };
             run(scene, opts)
         });
+        // written where the run stopped, a Ctrl-C included, before that is raised
+        let mut outcome = outcome;
+        if let (Some(p), Ok(report)) = (&restart, outcome.as_mut()) {
+            match report.restart.take() {
+                Some(Ok(mut r)) => {
+                    r.scene.clone_from(&self.digest);
+                    r.write(p).map_err(PyOSError::new_err)?
+                }
+                Some(Err(why)) => return Err(scene_error(format!("no restart file written: {why}"))),
+                None => {}
+            }
+        }
         if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
             return Err(e);
         }

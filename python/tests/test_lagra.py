@@ -164,6 +164,27 @@ def test_ctrl_c_stops_a_run_cleanly():
     assert s.run(steps=10).report["steps"] == 10
 
 
+def test_ctrl_c_leaves_a_restart_that_resumes_to_the_unbroken_run(tmp_path):
+    s = lagra.Scene.from_file(SCENES / "lj_liquid.lagra")
+    restart = tmp_path / "r.bin"
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        s.run(steps=2_000_000, restart=str(restart))
+    assert restart.exists(), "Ctrl-C wrote no restart file"
+    # cut again at a step of our choosing, and resumed from there to the end
+    s.run(steps=600, until=250, restart=str(restart))
+    resumed = s.run(steps=600, resume=str(restart))
+    whole = s.run(steps=600)
+    assert resumed.report["steps"] == 600
+    assert (resumed.positions[-1] == whole.positions[-1]).all()
+    assert (resumed.velocities[-1] == whole.velocities[-1]).all()
+    assert [c["line"] for c in resumed.report["claims"]] == [c["line"] for c in whole.report["claims"]]
+    other = lagra.Scene.from_file(SCENES / "kepler.lagra")
+    with pytest.raises(lagra.SceneError, match="another scene"):
+        other.run(resume=str(restart))
+
+
 def test_the_gil_is_released_while_it_runs():
     s = lagra.Scene.from_file(SCENES / "lj_liquid.lagra")
     done = threading.Event()

@@ -10,9 +10,11 @@
 
 use crate::observables::Observer;
 use crate::predict::Meter;
+use lagra_checker::checksum::{label, Fnv};
 use lagra_checker::monitor;
 use lagra_kernel::solvers::Carried;
 use lagra_kernel::state::State;
+use lagra_lang::scene::Scene;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::Write;
@@ -25,6 +27,9 @@ const DIGEST: usize = 32;
 pub struct Restart {
     /// `sha256:` and the digest of the source of the scene it belongs to.
     pub scene: String,
+    /// The digest of what the run was set up to be (`setup_of`): the compiled model and claims,
+    /// the integrator and the time step, which `--set` and `--dt` change and the source does not.
+    pub setup: String,
     /// The run length it was planned for.
     pub planned_steps: u64,
     pub state: State,
@@ -94,6 +99,14 @@ impl Restart {
     }
 }
 
+/// The FNV-1a digest of a scene as set up to run: its canonical model and claims, integrator
+/// and time step (what a restart must be resumed with).
+pub fn setup_of(scene: &Scene) -> String {
+    let setup = (&scene.model, &scene.claims, scene.solver.integrator.name(), scene.solver.dt.to_bits());
+    let json = serde_json::to_vec(&setup).expect("a model is plain data");
+    label(Fnv::of(&json))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,6 +124,7 @@ mod tests {
         };
         Restart {
             scene: "sha256:ab".into(),
+            setup: "fnv1a64:0".into(),
             planned_steps: 10,
             state: state.clone(),
             solver: Carried { forces: vec![[0.5, 0.25, -1e300]], potential: 2.0, warm: vec![] },

@@ -5,7 +5,7 @@
 use crate::checking::{can_overlap, Checking};
 use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
-use crate::restart::Restart;
+use crate::restart::{setup_of, Restart};
 use crate::trace::Frames;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
@@ -182,6 +182,11 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             if r.meters.len() != scene.predictions.len() || r.observer.is_some() != scene.sampling.is_some() {
                 return Err(fits("it measures other predictions or observables".into()));
             }
+            if r.setup != setup_of(scene) {
+                return Err(fits(
+                    "it was made with another model, claims, integrator or time step (--set, --dt)".into(),
+                ));
+            }
             if r.state.step > steps {
                 return Err(format!("the restart is at step {}, past the run's end at step {steps}", r.state.step));
             }
@@ -194,7 +199,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         monitor.hand_marks_to(sink);
     }
     let first_step = state.step;
-    let end = opts.until.map_or(steps, |u| u.clamp(first_step, steps));
+    if let Some(u) = opts.until.filter(|&u| u < first_step) {
+        return Err(format!("--until {u} is before the step the run resumes from, {first_step}"));
+    }
+    let end = opts.until.map_or(steps, |u| u.min(steps));
     let mut restarts = opts.restarts.take();
     let every_restart = restarts.as_ref().map_or(u64::MAX, |r| r.every.max(1));
     let tracing = opts.trace.is_some();
@@ -312,8 +320,15 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     }
                     let on_the_way = state.step.is_multiple_of(every_restart) && state.step < end;
                     if let Some(r) = restarts.as_mut().filter(|_| stop.is_none() && on_the_way) {
-                        let made =
-                            carry(&state, steps, solver.carried(), &graph, checking.carried(), &observer, &meters);
+                        let made = carry(
+                            &state,
+                            (scene, steps),
+                            solver.carried(),
+                            &graph,
+                            checking.carried(),
+                            &observer,
+                            &meters,
+                        );
                         (r.write)(made?)?;
                     }
                 }
@@ -357,7 +372,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let restart = restarts.map(|_| match &stop {
         Some(Stop::Checker(h)) => Err(format!("the run {h}, and cannot go on")),
         Some(Stop::Solver { step, message }) => Err(format!("the solver failed at step {step} ({message})")),
-        _ => carry(&state, steps, solver_carried, &graph, monitor.carried(), &observer, &meters),
+        _ => carry(&state, (scene, steps), solver_carried, &graph, monitor.carried(), &observer, &meters),
     });
     let plan = graph.plan();
     Ok(Report {
@@ -386,7 +401,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
 /// What goes on from state `s` (the front names its scene and certificate).
 fn carry(
     s: &State,
-    planned_steps: u64,
+    (scene, planned_steps): (&Scene, u64),
     solver: Result<lagra_kernel::solvers::Carried, String>,
     graph: &LagrangianGraph,
     monitor: Result<lagra_checker::monitor::Carried, String>,
@@ -395,6 +410,7 @@ fn carry(
 ) -> Result<Restart, String> {
     Ok(Restart {
         scene: String::new(),
+        setup: setup_of(scene),
         planned_steps,
         state: s.clone(),
         solver: solver?,
