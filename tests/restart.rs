@@ -169,6 +169,14 @@ fn a_restart_of_another_scene_or_damaged_is_refused() {
         std::fs::write(&damaged, &bytes[..cut]).unwrap();
         refused(resume("scenes/oscillator.lagra", ds), says);
     }
+    // the same source run with another parameter or time step is another run
+    for (flag, value) in [("--set", "harmonic.k=2.5"), ("--dt", "0.001")] {
+        let o = lagra(&["run", "scenes/oscillator.lagra", "--resume", rs, flag, value, "--quiet"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        let says = "lagra: the restart does not fit this scene: it was made with another model, claims, integrator or \
+                    time step (--set, --dt)";
+        assert!(stderr(&o).starts_with(says), "{}", stderr(&o));
+    }
     let mut edited = bytes.clone();
     edited[40] ^= 0x10;
     std::fs::write(&damaged, &edited).unwrap();

@@ -12,13 +12,17 @@ fn lagra_check(args: &[&str]) -> (Option<i32>, String, String) {
 fn help_says_what_it_does_and_how_it_exits() {
     let (code, out, _) = lagra_check(&["--help"]);
     assert_eq!(code, Some(0));
-    assert!(out.starts_with("usage: lagra-check CERTIFICATE [--states FILE]") && out.contains("Exit status"));
+    assert!(out.starts_with("usage: lagra-check CERTIFICATE... [--states FILE]...") && out.contains("Exit status"));
+    assert!(out.contains("re-checked as one run"), "{out}");
 }
 
 #[test]
 fn bad_invocations_exit_2() {
     assert_eq!(lagra_check(&[]).0, Some(2));
     assert_eq!(lagra_check(&["a", "b"]).0, Some(2));
+    let (code, _, err) = lagra_check(&["a", "b", "--states", "s"]);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("1 state files for 2 certificates"), "{err}");
     assert_eq!(lagra_check(&["--frobnicate"]).0, Some(2));
     assert_eq!(lagra_check(&["x.cert", "--states"]).0, Some(2));
     let (code, _, err) = lagra_check(&["/no/such/file.cert"]);
