@@ -250,9 +250,10 @@ impl PyScene {
         let marks =
             Spill::new(prepared.scene.claims.len(), None, true).map_err(|e| PyValueError::new_err(e.to_string()))?;
         let scene = &prepared.scene;
-        let mut unused = |_: Restart| Ok(());
-        let restarts = restart.is_some().then(|| Restarts { every: u64::MAX, write: &mut unused });
         let outcome = py.detach(|| {
+            // the restart at the end is the report's; none is written on the way
+            let mut unused = |_: Restart| Ok(());
+            let restarts = restart.is_some().then(|| Restarts { every: u64::MAX, write: &mut unused });
             // Ctrl-C is seen here, and the progress function called, about every 10⁶ atom-steps
             let mut tick = |step: u64| {
                 Python::attach(|py| {

@@ -169,8 +169,11 @@ def test_ctrl_c_leaves_a_restart_that_resumes_to_the_unbroken_run(tmp_path):
     restart = tmp_path / "r.bin"
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        s.run(steps=2_000_000, restart=str(restart))
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            s.run(steps=2_000_000, restart=str(restart))
+    finally:
+        timer.cancel()
     assert restart.exists(), "Ctrl-C wrote no restart file"
     # cut again at a step of our choosing, and resumed from there to the end
     s.run(steps=600, until=250, restart=str(restart))
