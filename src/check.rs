@@ -2,7 +2,6 @@
 
 use lagra_checker::certificate::Certificate;
 use lagra_run::compile;
-use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -53,8 +52,7 @@ fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
     let source = crate::reading::text(scene, limits.scene)?;
     let text = crate::reading::text(cert, limits.certificate)?;
     let c = Certificate::read(&text)?;
-    let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
-    if c.source_digest != format!("sha256:{digest}") {
+    if c.source_digest != crate::run::source_digest(&source) {
         return Err(format!("the certificate is of another source ({})", c.source_digest));
     }
     let path = scene.display().to_string();

@@ -122,6 +122,12 @@ steps; --resume FILE continues from it to the same bits as the run never stopped
 is certified in segments whose certificates chain (`lagra-check C1 C2 C3`)."
 }
 
+/// `sha256:` and the hex digest of a scene's source: what a certificate and a restart file name.
+pub fn source_digest(source: &str) -> String {
+    let hex: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
 /// Bad input: the message on stderr, exit code 2.
 fn bad(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("lagra: {msg}");
@@ -198,8 +204,7 @@ pub fn main(a: Args) -> ExitCode {
     if a.restart_every == Some(0) {
         return bad("--restart-every must be at least 1");
     }
-    let digest: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
-    let digest = format!("sha256:{digest}");
+    let digest = source_digest(&source);
     let resume = match a.resume.as_deref().map(|p| Restart::read(p).and_then(|r| r.belongs_to(&digest).map(|_| r))) {
         None => None,
         Some(Ok(r)) => Some(r),

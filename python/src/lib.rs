@@ -5,7 +5,7 @@
 //! and to look for Ctrl-C, which stops the run cleanly at the next look.
 
 use lagra::grad::{compute, GradMethod};
-use lagra::run::{prepare, summarize, Prepared};
+use lagra::run::{prepare, source_digest, summarize, Prepared};
 use lagra_checker::model::Cell;
 use lagra_kernel::state::State;
 use lagra_lang::params::apply_settings;
@@ -19,7 +19,6 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
@@ -80,8 +79,7 @@ impl PyScene {
     #[pyo3(signature = (text, path = "<string>"))]
     fn from_str(text: &str, path: &str) -> PyResult<Self> {
         let prepared = prepare(text, path, &[], None).map_err(scene_error)?;
-        let digest: String = Sha256::digest(text.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
-        Ok(PyScene { prepared, path: path.into(), digest: format!("sha256:{digest}") })
+        Ok(PyScene { prepared, path: path.into(), digest: source_digest(text) })
     }
 
     #[staticmethod]

@@ -339,7 +339,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     stop = Some(Stop::Until { step: state.step });
                 }
                 iterations = solver.iterations().cloned();
-                solver_carried = solver.carried();
+                if restarts.is_some() {
+                    solver_carried = solver.carried();
+                }
             }
         }
         // a breach at the checkpoint still being judged came first
