@@ -52,7 +52,7 @@ fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
     let source = crate::reading::text(scene, limits.scene)?;
     let text = crate::reading::text(cert, limits.certificate)?;
     let c = Certificate::read(&text)?;
-    if c.source_digest != crate::run::source_digest(&source) {
+    if c.source_digest != crate::reading::source_digest(&source) {
         return Err(format!("the certificate is of another source ({})", c.source_digest));
     }
     let path = scene.display().to_string();

@@ -215,6 +215,13 @@ fn percent_decoded(p: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// `sha256:` and the hex digest of a scene's source: what a certificate and a restart file name.
+pub fn source_digest(source: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let hex: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,7 +16,6 @@ use lagra_run::marks::{self, OnDisk, Spill};
 use lagra_run::restart::Restart;
 use lagra_run::run::{run, Options, Report, Restarts, Stop};
 use lagra_run::trace::{Behind, Format, Frames, Writer};
-use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -122,12 +121,6 @@ steps; --resume FILE continues from it to the same bits as the run never stopped
 is certified in segments whose certificates chain (`lagra-check C1 C2 C3`)."
 }
 
-/// `sha256:` and the hex digest of a scene's source: what a certificate and a restart file name.
-pub fn source_digest(source: &str) -> String {
-    let hex: String = Sha256::digest(source.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
-    format!("sha256:{hex}")
-}
-
 /// Bad input: the message on stderr, exit code 2.
 fn bad(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("lagra: {msg}");
@@ -204,7 +197,7 @@ pub fn main(a: Args) -> ExitCode {
     if a.restart_every == Some(0) {
         return bad("--restart-every must be at least 1");
     }
-    let digest = source_digest(&source);
+    let digest = crate::reading::source_digest(&source);
     let resume = match a.resume.as_deref().map(|p| Restart::read(p).and_then(|r| r.belongs_to(&digest).map(|_| r))) {
         None => None,
         Some(Ok(r)) => Some(r),

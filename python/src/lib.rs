@@ -5,7 +5,8 @@
 //! and to look for Ctrl-C, which stops the run cleanly at the next look.
 
 use lagra::grad::{compute, GradMethod};
-use lagra::run::{prepare, source_digest, summarize, Prepared};
+use lagra::reading::source_digest;
+use lagra::run::{prepare, summarize, Prepared};
 use lagra_checker::model::Cell;
 use lagra_kernel::state::State;
 use lagra_lang::params::apply_settings;
