@@ -1,4 +1,4 @@
-//! `lagra check CERTIFICATE... [--states FILE]... [--scene FILE]`.
+//! `lagra check CERTIFICATE... [--states FILE]... [--scene FILE [--set NAME=VALUE]...]`.
 
 use lagra_checker::certificate::Certificate;
 use lagra_run::compile;
@@ -19,6 +19,10 @@ pub struct Args {
     /// those the source compiles to (catches a certificate edited and re-sealed).
     #[arg(long, value_name = "FILE")]
     scene: Option<PathBuf>,
+    /// With --scene: the settings the run was made with (`lagra run --set`, a `lagra sweep`
+    /// variant's row), applied to the scene before it is compared.
+    #[arg(long = "set", value_name = "NAME=VALUE", requires = "scene")]
+    set: Vec<String>,
 }
 
 pub fn main(a: Args) -> ExitCode {
@@ -35,7 +39,7 @@ pub fn main(a: Args) -> ExitCode {
     eprint!("{}", r.stderr);
     let mut code = r.code;
     if let (Some(scene), 0 | 1) = (&a.scene, code) {
-        match a.certificate.iter().try_for_each(|c| of_scene(c, scene)) {
+        match a.certificate.iter().try_for_each(|c| of_scene(c, scene, &a.set)) {
             Ok(()) => println!("scene       {} compiles to the certified model and claims", scene.display()),
             Err(why) => {
                 println!("scene       DISAGREES: {why}");
@@ -46,8 +50,8 @@ pub fn main(a: Args) -> ExitCode {
     ExitCode::from(code)
 }
 
-/// The certificate's source digest, model and claims are those of `scene`.
-fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
+/// The certificate's source digest, model and claims are those of `scene` with `set` applied.
+fn of_scene(cert: &PathBuf, scene: &PathBuf, set: &[String]) -> Result<(), String> {
     let limits = crate::reading::Limits::from_env();
     let source = crate::reading::text(scene, limits.scene)?;
     let text = crate::reading::text(cert, limits.certificate)?;
@@ -57,6 +61,7 @@ fn of_scene(cert: &PathBuf, scene: &PathBuf) -> Result<(), String> {
     }
     let path = scene.display().to_string();
     let mut s = compile(&source).map_err(|d| d.render(&path, &source).head)?;
+    lagra_lang::params::apply_settings(&mut s, set)?;
     // `@expect noether` stands for the claims the derived table gives
     crate::noether::apply(&mut s, &path, &source);
     if s.model != c.model {

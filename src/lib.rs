@@ -13,6 +13,7 @@ pub mod reading;
 pub mod report;
 pub mod run;
 pub mod summation;
+pub mod sweep;
 pub mod terms;
 pub mod validation;
 pub mod view;

@@ -1,7 +1,7 @@
 //! `lagra`: run a scene and certify its claims.
 
 use clap::{Parser, Subcommand};
-use lagra::{bench, check, grad, lean, list, mcp, noether, run, terms, view};
+use lagra::{bench, check, grad, lean, list, mcp, noether, run, sweep, terms, view};
 use std::process::ExitCode;
 
 /// mimalloc, for its heaps per thread: the kernel on two threads, 1,000 steps of 32,000 atoms,
@@ -30,6 +30,13 @@ enum Command {
     /// Run a .lagra scene and certify its @expect claims with interval arithmetic.
     #[command(after_help = run::after_help())]
     Run(run::Args),
+    /// Run variants of a scene (every combination of --set NAME=V1,V2,...), each in a process of
+    /// its own with its own certificate, a few at a time; then one table.
+    #[command(after_help = "Exit status: 0 every variant ran and PASSed every claim and prediction; 1 one did \
+not (or crashed: its row says how); 2 bad input, found before any variant runs (every variant is compiled \
+first); 130 or 143 stopped by SIGINT or SIGTERM, passed on to the running variants, which write their \
+certificates as far as they got.")]
+    Sweep(sweep::Args),
     /// Re-check a certificate without the kernel (the same code and output as `lagra-check`),
     /// and with --scene, check that it certifies that scene.
     #[command(after_help = "Exit status: 0 the re-check agrees and every claim PASSed; 1 it disagrees, a claim \
@@ -64,6 +71,7 @@ did not PASS, or the certificate is not of the scene given; 2 a file is missing,
 fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Run(args) => run::main(args),
+        Command::Sweep(args) => sweep::main(args),
         Command::Check(args) => check::main(args),
         Command::List(args) => list::main(args),
         Command::Terms => terms::main(),
