@@ -3,6 +3,18 @@
 # GMP build requires and a fresh Debian machine lacks, and z3 for the SMT proofs. Safe to run
 # again; does nothing when both are there.
 set -eu
+# `bash setup.sh --mpi` installs only what building with `--features mpi` needs: Open MPI (its
+# headers, mpicc and mpirun) and libclang, which rsmpi's bindgen reads the headers with. The
+# README's two commands do not need it; CI asks for it to run tests/mpi.rs.
+if [ "${1:-}" = "--mpi" ]; then
+  if ! dpkg -s libopenmpi-dev openmpi-bin libclang-dev >/dev/null 2>&1; then
+    echo "setup: installing Open MPI and libclang (for --features mpi)" >&2
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq libopenmpi-dev openmpi-bin libclang-dev >/dev/null
+  fi
+  exit 0
+fi
 if ! command -v m4 >/dev/null 2>&1; then
   echo "setup: installing m4 (needed to build GMP for rug)" >&2
   sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"

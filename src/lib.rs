@@ -9,6 +9,7 @@ pub mod list;
 pub mod mcp;
 pub mod noether;
 pub mod progress;
+pub mod ranks;
 pub mod reading;
 pub mod report;
 pub mod run;

@@ -169,6 +169,21 @@ pub fn summarize(path: &str, p: &Prepared, rep: &Report, threads: usize, explain
 }
 
 pub fn main(a: Args) -> ExitCode {
+    // under mpirun, one rank runs the scene (the world lives until the run's end)
+    let world = match crate::ranks::World::join() {
+        Ok(w) => w,
+        Err(e) => return bad(e),
+    };
+    if world.size > 1 {
+        if !world.is_root() {
+            return ExitCode::SUCCESS;
+        }
+        eprintln!(
+            "lagra: rank 0 of {} runs the scene whole: a scene is not yet cut into domains across MPI ranks \
+             (issue 41); the other ranks wait",
+            world.size
+        );
+    }
     let path = a.file.display().to_string();
     let source = match crate::reading::text(&a.file, crate::reading::Limits::from_env().scene) {
         Ok(s) => s,

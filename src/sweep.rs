@@ -1,9 +1,12 @@
 //! `lagra sweep FILE --set NAME=V1,V2,...`: independent variants of one scene (a parameter scan,
 //! an ensemble of seeds or starting velocities), each a `lagra run` in a process of its own with
 //! its own certificate, a few at a time; then one table. A variant that crashes or is killed
-//! takes nothing else with it, and its row says so: it never counts as a PASS.
+//! takes nothing else with it, and its row says so: it never counts as a PASS. Under `mpirun`
+//! (built with `--features mpi`) the variants are dealt to the ranks in turn, each rank runs its
+//! own the same way, and rank 0 gathers the rows: the folder must be one every rank can write.
 
-use serde::Serialize;
+use crate::ranks::{World, LAUNCHER_VARIABLES};
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitCode, Stdio};
@@ -79,9 +82,11 @@ pub fn combinations(axes: &[Axis]) -> Vec<Vec<usize>> {
 }
 
 /// One variant: what is set, and (once run) how it went.
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct Variant {
     pub index: usize,
+    /// The MPI rank that ran it (0 without MPI).
+    pub rank: usize,
     /// `NAME=VALUE` for each axis (`dt=VALUE` for the time step).
     pub settings: Vec<String>,
     pub certificate: PathBuf,
@@ -104,6 +109,8 @@ impl Variant {
 pub struct Sweep {
     pub file: String,
     pub axes: Vec<Axis>,
+    /// MPI ranks (1 without MPI); `jobs` variants at a time on each.
+    pub ranks: usize,
     pub jobs: usize,
     pub threads: usize,
     pub out: PathBuf,
@@ -115,37 +122,52 @@ pub struct Sweep {
     pub stopped: Option<String>,
 }
 
-fn bad(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("lagra: {msg}");
-    ExitCode::from(2)
+/// What one rank sends rank 0: the signal that stopped it (0 if none) and its variants.
+#[derive(Serialize, Deserialize)]
+struct Share {
+    signal: i32,
+    variants: Vec<Variant>,
 }
 
 pub fn main(a: Args) -> ExitCode {
-    let path = a.file.display().to_string();
-    let source = match crate::reading::text(&a.file, crate::reading::Limits::from_env().scene) {
-        Ok(s) => s,
-        Err(e) => return bad(e),
+    let world = match World::join() {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("lagra: {e}");
+            return ExitCode::from(2);
+        }
     };
-    let mut axes = match a.set.iter().map(|s| axis(s)).collect::<Result<Vec<_>, _>>() {
-        Ok(v) => v,
-        Err(e) => return bad(e),
-    };
-    if let Some(dt) = &a.dt {
-        match axis(&format!("dt={dt}")) {
-            Ok(ax) => axes.push(ax),
-            Err(e) => return bad(format!("--dt: {e}")),
+    match sweep(&a, &world) {
+        Ok(code) => code,
+        // every rank found the same bad input: one says so
+        Err(e) => {
+            if world.is_root() {
+                eprintln!("lagra: {e}");
+            }
+            ExitCode::from(2)
         }
     }
+}
+
+fn sweep(a: &Args, world: &World) -> Result<ExitCode, String> {
+    let path = a.file.display().to_string();
+    let source = crate::reading::text(&a.file, crate::reading::Limits::from_env().scene)?;
+    let mut axes = a.set.iter().map(|s| axis(s)).collect::<Result<Vec<_>, _>>()?;
+    if let Some(dt) = &a.dt {
+        axes.push(axis(&format!("dt={dt}")).map_err(|e| format!("--dt: {e}"))?);
+    }
     if axes.is_empty() {
-        return bad("a sweep needs an axis: --set NAME=V1,V2,... or --dt DT1,DT2,...");
+        return Err("a sweep needs an axis: --set NAME=V1,V2,... or --dt DT1,DT2,...".into());
     }
     let count: usize = axes.iter().map(|ax| ax.values.len()).product();
     if count > MOST_VARIANTS {
-        return bad(format!("the sweep has {count} variants, more than {MOST_VARIANTS}: split it"));
+        return Err(format!("the sweep has {count} variants, more than {MOST_VARIANTS}: split it"));
     }
     if a.threads == 0 || a.jobs == Some(0) || a.steps == Some(0) {
-        return bad("--threads, --jobs and --steps must be at least 1");
+        return Err("--threads, --jobs and --steps must be at least 1".into());
     }
+    let stem = a.file.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("sweep-{stem}")));
     // every variant compiled here first: a value the scene refuses stops the sweep before it runs
     let mut variants = vec![];
     for (index, pick) in combinations(&axes).into_iter().enumerate() {
@@ -154,47 +176,53 @@ pub fn main(a: Args) -> ExitCode {
         let (dt, set): (Vec<&String>, Vec<&String>) = settings.iter().partition(|s| s.starts_with("dt="));
         let set: Vec<String> = set.into_iter().cloned().collect();
         let dt = dt.first().map(|s| s["dt=".len()..].parse::<f64>().expect("checked by axis"));
-        if let Err(e) = crate::run::prepare(&source, &path, &set, dt) {
-            return bad(format!("variant {index} ({}): {e}", settings.join(" ")));
-        }
+        crate::run::prepare(&source, &path, &set, dt)
+            .map_err(|e| format!("variant {index} ({}): {e}", settings.join(" ")))?;
         variants.push(Variant {
             index,
+            rank: index % world.size,
             settings,
-            certificate: PathBuf::new(),
+            certificate: out.join(format!("v{index}.cert.json")),
             exit: None,
             failure: None,
             wall_s: 0.0,
             report: None,
         });
     }
-    let stem = a.file.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("sweep-{stem}")));
-    if let Err(e) = std::fs::create_dir_all(&out) {
-        return bad(format!("cannot make the folder {}: {e}", out.display()));
-    }
-    variants.iter_mut().for_each(|v| v.certificate = out.join(format!("v{}.cert.json", v.index)));
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot make the folder {}: {e}", out.display()))?;
+    // this rank's share: every size-th variant
+    let mine: Vec<Variant> = variants.into_iter().filter(|v| v.rank == world.rank).collect();
     let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let jobs = a.jobs.unwrap_or((cpus / a.threads).max(1)).min(variants.len());
+    let jobs = a.jobs.unwrap_or((cpus / world.here() / a.threads).max(1)).min(mine.len().max(1));
     let stop = Arc::new(AtomicBool::new(false));
     let by = Arc::new(AtomicUsize::new(0));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let listened = signal_hook::flag::register(sig, Arc::clone(&stop))
-            .and_then(|_| signal_hook::flag::register_usize(sig, Arc::clone(&by), sig as usize));
-        if let Err(e) = listened {
-            return bad(format!("cannot listen for SIGINT and SIGTERM: {e}"));
-        }
+        signal_hook::flag::register(sig, Arc::clone(&stop))
+            .and_then(|_| signal_hook::flag::register_usize(sig, Arc::clone(&by), sig as usize))
+            .map_err(|e| format!("cannot listen for SIGINT and SIGTERM: {e}"))?;
     }
     let started = Instant::now();
-    let done = run_all(&a, &out, variants, jobs, &stop);
-    let signal = by.load(Ordering::SeqCst) as i32;
+    let done = run_all(a, world, &out, mine, jobs, &stop);
+    let share = Share { signal: by.load(Ordering::SeqCst) as i32, variants: done };
+    let bytes = serde_json::to_vec(&share).expect("the variants are plain data");
+    let Some(shares) = world.gather(bytes) else { return Ok(ExitCode::SUCCESS) };
+    let shares: Vec<Share> = shares
+        .iter()
+        .map(|b| serde_json::from_slice(b))
+        .collect::<Result<_, _>>()
+        .expect("every rank sends what this code wrote");
+    let signal = shares.iter().map(|s| s.signal).find(|&s| s != 0).unwrap_or(0);
+    let mut all: Vec<Variant> = shares.into_iter().flat_map(|s| s.variants).collect();
+    all.sort_by_key(|v| v.index);
     let sweep = Sweep {
         file: path,
         axes,
+        ranks: world.size,
         jobs,
         threads: a.threads,
         out: out.clone(),
-        passed: signal == 0 && done.iter().all(Variant::passed),
-        variants: done,
+        passed: signal == 0 && all.iter().all(Variant::passed),
+        variants: all,
         wall_s: started.elapsed().as_secs_f64(),
         stopped: (signal != 0).then(|| format!("stopped by signal {signal}: the variants not yet started did not run")),
     };
@@ -207,15 +235,22 @@ pub fn main(a: Args) -> ExitCode {
     } else {
         print!("{}", table(&sweep));
     }
-    match signal {
+    Ok(match signal {
         0 if sweep.passed => ExitCode::SUCCESS,
         0 => ExitCode::from(1),
         s => ExitCode::from(128 + s as u8),
-    }
+    })
 }
 
 /// Runs the variants, `jobs` at a time, each its own `lagra run` process; returns them in order.
-fn run_all(a: &Args, out: &Path, variants: Vec<Variant>, jobs: usize, stop: &AtomicBool) -> Vec<Variant> {
+fn run_all(
+    a: &Args,
+    world: &World,
+    out: &Path,
+    variants: Vec<Variant>,
+    jobs: usize,
+    stop: &AtomicBool,
+) -> Vec<Variant> {
     let total = variants.len();
     let queue = Mutex::new(variants.into_iter());
     let finished = Mutex::new(vec![]);
@@ -234,7 +269,8 @@ fn run_all(a: &Args, out: &Path, variants: Vec<Variant>, jobs: usize, stop: &Ato
                 }
                 let mut f = finished.lock().unwrap();
                 if !a.quiet && v.failure.as_deref() != Some("not run: the sweep was stopped") {
-                    eprintln!("lagra sweep: [{}/{total}] {} {}", f.len() + 1, v.settings.join(" "), outcome(&v));
+                    let rank = if world.size > 1 { format!(" rank {}", world.rank) } else { String::new() };
+                    eprintln!("lagra sweep{rank}: [{}/{total}] {} {}", f.len() + 1, v.settings.join(" "), outcome(&v));
                 }
                 f.push(v);
             });
@@ -270,6 +306,12 @@ fn run_one(exe: &Path, a: &Args, out: &Path, v: &mut Variant, stop: &AtomicBool)
             return;
         }
     };
+    // the variant is a plain process, not a rank: the launcher's variables are not passed on
+    for (name, _) in std::env::vars_os() {
+        if LAUNCHER_VARIABLES.iter().any(|p| name.to_string_lossy().starts_with(p)) {
+            cmd.env_remove(name);
+        }
+    }
     let started = Instant::now();
     let child = cmd.stdin(Stdio::null()).stdout(r).stderr(l).spawn();
     let status = match child.and_then(|c| wait(c, stop)) {
@@ -380,10 +422,11 @@ pub fn table(s: &Sweep) -> String {
     let widths: Vec<usize> =
         (0..rows[0].len()).map(|i| rows.iter().map(|r| r[i].chars().count()).max().unwrap_or(0)).collect();
     let mut text = format!(
-        "sweep of {}: {} variants, {} at a time, {} thread(s) each, {:.2} s; files in {}\n",
+        "sweep of {}: {} variants, {} at a time{}, {} thread(s) each, {:.2} s; files in {}\n",
         s.file,
         s.variants.len(),
         s.jobs,
+        if s.ranks > 1 { format!(" on each of {} ranks", s.ranks) } else { String::new() },
         s.threads,
         s.wall_s,
         s.out.display()

@@ -109,7 +109,7 @@ fn bad_input_stops_the_sweep_before_any_variant_runs() {
 #[test]
 fn a_stopped_sweep_reports_what_it_saw_and_no_more() {
     let dir = tempfile::tempdir().unwrap();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lagra"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_lagra"))
         .args(["sweep", "scenes/oscillator.lagra", "--quiet", "--json", "--jobs", "1", "--steps", "1000000000"])
         .args(["--set", "harmonic.k=1,2", "--out"])
         .arg(dir.path())
@@ -141,4 +141,20 @@ fn a_stopped_sweep_reports_what_it_saw_and_no_more() {
         }
         _ => assert_eq!(v[0]["failure"], "ended by signal 15", "{}", v[0]),
     }
+}
+
+/// A lagra built without MPI but started as one of several ranks would have every rank run the
+/// whole sweep into the same folder: it refuses, saying how to build it.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn without_mpi_a_rank_of_many_refuses() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lagra"))
+        .args(["sweep", "scenes/oscillator.lagra", "--set", "harmonic.k=1,2", "--out", "/nonexistent/never"])
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("one of 2 MPI ranks, but this lagra was built without MPI"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--features mpi"), "{}", stderr(&o));
 }

@@ -1,0 +1,127 @@
+//! The processes a command runs on: this one, or the ranks of an MPI job (`mpirun -np P lagra
+//! ...`, built with `--features mpi`). MPI is started only when a launcher started this process
+//! (it sets `OMPI_COMM_WORLD_SIZE` or `PMI_SIZE`): a plain `lagra` never touches it. A `lagra`
+//! built without MPI but launched as one of several ranks refuses to go on, since every rank
+//! would do the whole job and write the same files.
+
+/// This process's place in the job.
+pub struct World {
+    /// Finalizes MPI when dropped: the world lives as long as the command's work.
+    #[cfg(feature = "mpi")]
+    universe: Option<mpi::environment::Universe>,
+    pub rank: usize,
+    pub size: usize,
+}
+
+/// The variables by which Open MPI's and MPICH's launchers (and Slurm's, through PMI) tell a
+/// process the job's size, and its share of this machine.
+const SIZE: [&str; 2] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"];
+const LOCAL_SIZE: [&str; 2] = ["OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"];
+
+/// What the launcher says, for the names given: the first that reads as a number.
+fn said(names: &[&str]) -> Option<usize> {
+    names.iter().find_map(|n| std::env::var(n).ok()?.trim().parse().ok())
+}
+
+/// The prefixes of every variable a launcher sets: a child process that is not a rank (a sweep's
+/// variant) must not believe it is one.
+pub const LAUNCHER_VARIABLES: [&str; 3] = ["OMPI_", "PMI_", "PMIX_"];
+
+impl World {
+    /// This process alone.
+    pub fn one() -> World {
+        World {
+            #[cfg(feature = "mpi")]
+            universe: None,
+            rank: 0,
+            size: 1,
+        }
+    }
+
+    /// The job this process belongs to: MPI's world if a launcher started it, else this process.
+    pub fn join() -> Result<World, String> {
+        let launched = said(&SIZE);
+        #[cfg(feature = "mpi")]
+        if launched.is_some() {
+            use mpi::traits::Communicator;
+            let universe = mpi::initialize().ok_or("MPI could not be started (it was started before)")?;
+            let world = universe.world();
+            let (rank, size) = (world.rank() as usize, world.size() as usize);
+            return Ok(World { universe: Some(universe), rank, size });
+        }
+        match launched {
+            Some(p) if p > 1 && cfg!(not(feature = "mpi")) => Err(format!(
+                "started as one of {p} MPI ranks, but this lagra was built without MPI: every rank would do \
+                 the whole job. Build it with `cargo build --release --features mpi` (after `bash setup.sh --mpi`), \
+                 or run it without mpirun"
+            )),
+            _ => Ok(World::one()),
+        }
+    }
+
+    pub fn is_root(&self) -> bool {
+        self.rank == 0
+    }
+
+    /// How many ranks share this machine (the launcher says; one without a launcher).
+    pub fn here(&self) -> usize {
+        if self.size == 1 {
+            1
+        } else {
+            said(&LOCAL_SIZE).unwrap_or(1).max(1)
+        }
+    }
+
+    /// Every rank's bytes at rank 0, in rank order (`None` on the other ranks). A collective:
+    /// every rank must call it. A rank that dies makes the launcher end the job; nothing here
+    /// waits on it alone.
+    pub fn gather(&self, mine: Vec<u8>) -> Option<Vec<Vec<u8>>> {
+        #[cfg(feature = "mpi")]
+        if let Some(u) = &self.universe {
+            return gather(&u.world(), mine);
+        }
+        Some(vec![mine])
+    }
+}
+
+/// MPI_Gather of the lengths, then MPI_Gatherv of the bytes.
+#[cfg(feature = "mpi")]
+fn gather(world: &mpi::topology::SimpleCommunicator, mine: Vec<u8>) -> Option<Vec<Vec<u8>>> {
+    use mpi::datatype::PartitionMut;
+    use mpi::traits::{Communicator, Root};
+    use mpi::Count;
+    let root = world.process_at_rank(0);
+    let count = Count::try_from(mine.len()).expect("a rank's share is under 2 GiB");
+    if world.rank() != 0 {
+        root.gather_into(&count);
+        root.gather_varcount_into(&mine[..]);
+        return None;
+    }
+    let mut counts = vec![0 as Count; world.size() as usize];
+    root.gather_into_root(&count, &mut counts[..]);
+    let starts: Vec<Count> = counts.iter().scan(0, |at, &n| Some(std::mem::replace(at, *at + n))).collect();
+    let mut all = vec![0u8; counts.iter().map(|&n| n as usize).sum()];
+    root.gather_varcount_into_root(&mine[..], &mut PartitionMut::new(&mut all[..], &counts[..], &starts[..]));
+    let mut at = 0;
+    Some(
+        counts
+            .iter()
+            .map(|&n| {
+                at += n as usize;
+                all[at - n as usize..at].to_vec()
+            })
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alone_a_world_is_this_process_and_gathers_its_own_bytes() {
+        let w = World::one();
+        assert!(w.is_root() && w.size == 1 && w.here() == 1);
+        assert_eq!(w.gather(vec![1, 2, 3]), Some(vec![vec![1, 2, 3]]));
+    }
+}
