@@ -35,7 +35,9 @@ enum Command {
     #[command(after_help = "Exit status: 0 every variant ran and PASSed every claim and prediction; 1 one did \
 not (or crashed: its row says how); 2 bad input, found before any variant runs (every variant is compiled \
 first); 130 or 143 stopped by SIGINT or SIGTERM, passed on to the running variants, which write their \
-certificates as far as they got.")]
+certificates as far as they got.\n\nUnder mpirun (a lagra built with --features mpi): the variants are dealt to the ranks in turn \
+(variant i to rank i mod P), each rank runs its own --jobs at a time, and rank 0 gathers the rows and prints the \
+table; the --out folder must be one every rank can write (a shared file system on a cluster).")]
     Sweep(sweep::Args),
     /// Re-check a certificate without the kernel (the same code and output as `lagra-check`),
     /// and with --scene, check that it certifies that scene.

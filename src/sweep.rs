@@ -29,8 +29,8 @@ pub struct Args {
     /// Run each variant this many steps instead of the scene's own run length.
     #[arg(long, value_name = "N")]
     steps: Option<u64>,
-    /// How many variants run at once. Without it: the CPUs (available_parallelism) over
-    /// --threads.
+    /// How many variants run at once (on each MPI rank). Without it: the CPUs
+    /// (available_parallelism) over the ranks on this machine over --threads.
     #[arg(long, value_name = "N")]
     jobs: Option<usize>,
     /// Threads for each variant's run (`lagra run --threads`).
