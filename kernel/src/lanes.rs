@@ -170,6 +170,11 @@ impl Mask4 {
     pub fn and(self, x: F64x4) -> F64x4 {
         F64x4(self.0 & x.0)
     }
+    /// Whether any lane holds.
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.0.any()
+    }
 }
 
 impl BitAnd for Mask4 {
@@ -190,6 +195,7 @@ mod tests {
         assert_eq!(a.lt(F64x4::splat(2.5)).and(a).to_array(), [1.0, 2.0, 0.0, 0.0]);
         let m = Mask4::new([true, false, true, true]) & a.lt(F64x4::splat(3.5));
         assert_eq!(m.and(a).to_array(), [1.0, 0.0, 3.0, 0.0]);
+        assert!(m.any() && !a.lt(F64x4::splat(0.5)).any());
     }
 
     #[test]

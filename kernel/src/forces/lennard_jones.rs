@@ -46,17 +46,20 @@ impl Lj {
     }
 
     /// The plain term's radial derivatives at r² for parameters (ε, σ, ...): with u = (σ/r)⁶,
-    /// s = 24ε(u − 2u²)/r², s_r = 96ε(7u² − 2u)/r⁴, ∂s/∂ε = s/ε, ∂s/∂σ = 144ε(u − 4u²)/(σr²).
+    /// s = 24ε(u − 2u²)/r², s_r = 96ε(7u² − 2u)/r⁴, ∂s/∂ε = 24(u − 2u²)/r², ∂s/∂σ =
+    /// (144ε/σ)(u − 4u²)/r². One division a row, as in the force (1/r²; 144ε/σ is a scalar
+    /// of the instance): the pullback's rows waited on three.
     #[inline(always)]
     pub(crate) fn jet_at<L: Lane>(&self, p: &[f64], r2: L) -> Jet<L> {
         let (eps, sigma) = (p[0], p[1]);
         let inv = L::splat(1.0) / r2;
         let s2 = inv * self.sigma2;
         let u = s2 * s2 * s2;
-        let s = (u - u * 2.0 * u) * self.eps24 * inv;
+        let attraction = (u - u * 2.0 * u) * inv;
+        let s = attraction * self.eps24;
         let s_r = (u * 7.0 * u - u * 2.0) * (96.0 * eps) * inv * inv;
-        let ds_sigma = (u - u * 4.0 * u) * (144.0 * eps) * inv / L::splat(sigma);
-        Jet { s, s_r, ds: [s / L::splat(eps), ds_sigma, L::splat(0.0)] }
+        let ds_sigma = (u - u * 4.0 * u) * (144.0 * eps / sigma) * inv;
+        Jet { s, s_r, ds: [attraction * 24.0, ds_sigma, L::splat(0.0)] }
     }
 
     /// The plain term and its derivative at r²: (V, dV/dr / r).
