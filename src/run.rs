@@ -226,12 +226,12 @@ pub fn main(a: Args) -> ExitCode {
     };
     let mut file = match a.trace.as_ref().zip(format) {
         Some((p, format)) => match File::create(p) {
-            Ok(f) => Some(Behind::new(Writer { out: BufWriter::new(f), format, cell: scene.model.cell })),
+            Ok(f) => Some(Behind::new(Writer::new(BufWriter::new(f), format, &scene.model))),
             Err(e) => return bad(format!("cannot create the trace file: {e}")),
         },
         None => None,
     };
-    let mut kept = a.view.as_ref().map(|_| PageFrames::new(scene.model.cell));
+    let mut kept = a.view.as_ref().map(|_| PageFrames::new(&scene.model));
     let mut both = Tee(file.as_mut(), kept.as_mut());
     let tracing = both.0.is_some() || both.1.is_some();
     let mut states = match a

@@ -6,7 +6,7 @@
 //! certificate adding the looks and the bounds.
 
 use lagra_checker::certificate::Certificate;
-use lagra_checker::model::Model;
+use lagra_checker::model::{Extent, Model};
 use lagra_checker::terms::Shape;
 use lagra_lang::scene::Scene;
 use lagra_run::thinned::Thinned;
@@ -25,11 +25,12 @@ pub const PAGE_TRACE_BYTES: usize = 64 << 20;
 pub struct PageFrames {
     lines: Option<Thinned<Vec<u8>>>,
     cell: Option<lagra_checker::model::Cell>,
+    rigid: Vec<usize>,
 }
 
 impl PageFrames {
-    pub fn new(cell: Option<lagra_checker::model::Cell>) -> Self {
-        PageFrames { lines: None, cell }
+    pub fn new(model: &Model) -> Self {
+        PageFrames { lines: None, cell: model.cell, rigid: lagra_run::trace::rigid_bodies(model) }
     }
 
     /// The trace text, and every how many frames one was kept.
@@ -42,7 +43,7 @@ impl PageFrames {
 
 impl Frames for PageFrames {
     fn frame(&mut self, s: &lagra_kernel::state::State, energy: f64) -> std::io::Result<()> {
-        let mut line = Writer { out: vec![], format: Format::Jsonl, cell: self.cell };
+        let mut line = Writer { out: vec![], format: Format::Jsonl, cell: self.cell, rigid: self.rigid.clone() };
         line.frame(s, energy)?;
         let lines = self.lines.get_or_insert_with(|| Thinned::new(PAGE_TRACE_BYTES / line.out.len().max(1)));
         lines.push(line.out);
@@ -71,12 +72,19 @@ struct Frame {
     step: u64,
     t: f64,
     x: Vec<[f64; 3]>,
+    /// Each body's orientation (w, x, y, z), where the trace has them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    q: Option<Vec<[f64; 4]>>,
 }
 
 #[derive(Serialize)]
 struct Body {
     size: f64,
     colour: String,
+    /// A rigid body's solid (a box's half edges, a ball's radius), drawn turned as its frame's
+    /// orientation says.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    solid: Option<Extent>,
 }
 
 #[derive(Serialize)]
@@ -138,13 +146,26 @@ pub fn page(trace: &str, name: &str, scene: Option<&Scene>, cert: Option<&Certif
         if x.iter().chain(&vel).flatten().any(|c| !c.is_finite()) {
             return Err(format!("{at}: a coordinate is not finite"));
         }
+        let q: Option<Vec<[f64; 4]>> = match &v["q"] {
+            serde_json::Value::Null => None,
+            q => Some(serde_json::from_value(q.clone()).map_err(|e| format!("{at}: `q`: {e}"))?),
+        };
+        if let Some(q) = &q {
+            let good = |q: &[f64; 4]| q.iter().all(|c| c.is_finite()) && q.iter().any(|&c| c != 0.0);
+            if q.len() != x.len() || !q.iter().all(good) {
+                return Err(format!(
+                    "{at}: `q` must hold a finite, non-zero quaternion for each of the {} bodies",
+                    x.len()
+                ));
+            }
+        }
         if let Some(first) = frames.first().map(|f: &(Frame, Vec<[f64; 3]>)| f.0.x.len()) {
             if x.len() != first {
                 return Err(format!("{at}: {} bodies where the first frame has {first}", x.len()));
             }
         }
         energy.push([t, v["energy"].as_f64().unwrap_or(f64::NAN)]);
-        frames.push((Frame { step, t, x }, vel));
+        frames.push((Frame { step, t, x, q }, vel));
     }
     if frames.is_empty() {
         return Err(format!("{name} holds no frame"));
@@ -174,6 +195,7 @@ pub fn page(trace: &str, name: &str, scene: Option<&Scene>, cert: Option<&Certif
         .map(|i| Body {
             size: scene.map_or(0.0, |s| s.sizes[i]),
             colour: model.map_or("#78909c".into(), |m| colour(m.bodies[i].colour, m.bodies[i].charge)),
+            solid: model.and_then(|m| m.bodies[i].solid).map(|s| s.extent),
         })
         .collect();
     let bonds = model.map_or(vec![], |m| {

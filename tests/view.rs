@@ -10,6 +10,11 @@ use std::process::Command;
 
 /// What the page reports it drew (its `status` element), after its script ran in Chromium.
 fn drawn(page: &Path, profile: &Path) -> Value {
+    drawn_from(page, profile, "")
+}
+
+/// The same, seen from the view the address asks for (`#yaw=0&pitch=0`).
+fn drawn_from(page: &Path, profile: &Path, view: &str) -> Value {
     let o = Command::new("chromium")
         .args([
             "--headless",
@@ -24,7 +29,7 @@ fn drawn(page: &Path, profile: &Path) -> Value {
             "--virtual-time-budget=3000",
             "--dump-dom",
         ])
-        .arg(format!("file://{}", page.display()))
+        .arg(format!("file://{}{view}", page.display()))
         .output()
         .expect("chromium runs (setup.sh installs it)");
     let dom = String::from_utf8_lossy(&o.stdout);
@@ -102,4 +107,45 @@ fn view_reads_a_trace_with_its_scene_and_certificate() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+}
+
+/// A rigid box is drawn as a box turned as its orientation says: a long box (4 × 1 × 1) turned
+/// 30° about the line of sight (the view from +z) is drawn with its long axis 30° from the
+/// horizontal, the same box unturned along it.
+#[test]
+fn a_tilted_box_is_drawn_tilted() {
+    let dir = tempfile::tempdir().unwrap();
+    for angle in [0.0, 30.0] {
+        let scene = common::scene(
+            dir.path(),
+            "box.lagra",
+            &format!(
+                "scene tilted {{ uses newtonian.rigid_bodies
+                   entity {{ shape: box, size: [4, 1, 1], mass: 1, position: [0, 0, 0], velocity: [0.1, 0, 0],
+                             orientation: {{ axis: [0, 0, 1], angle: {angle} deg }} }}
+                   @expect energy_conservation {{ tol: 1e-9 }}
+                   solver {{ dt: 0.01, steps: 10 }} }}"
+            ),
+        );
+        let page = dir.path().join("box.html");
+        let o = lagra(&["run", scene.to_str().unwrap(), "--view", page.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        let status = drawn_from(&page, &dir.path().join("chromium"), "#yaw=0&pitch=0");
+        let tilt = status["tilt"].as_f64().unwrap();
+        assert!((tilt - angle).abs() < 1.0, "turned {angle}°, drawn at {tilt}°: {status}");
+        assert!(status["drawn"].as_u64().unwrap() > 2000, "a box, not a dot: {status}");
+    }
+    // bad input: an orientation per body, four finite numbers each, not all zero
+    let trace = dir.path().join("q.jsonl");
+    for q in ["[[1,0,0]]", "[[1,0,0,0],[1,0,0,0]]", "[[0,0,0,0]]"] {
+        std::fs::write(&trace, format!("{{\"step\": 0, \"t\": 0, \"x\": [[0,0,0]], \"v\": [[0,0,0]], \"q\": {q}}}\n"))
+            .unwrap();
+        let o = lagra(&["view", trace.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{q}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("q.jsonl:1: `q`"),
+            "{q}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
 }

@@ -58,6 +58,13 @@ class Result:
         return self._run.velocities
 
     @property
+    def orientations(self):
+        """NumPy array (frames, bodies, 4): each body's orientation, a unit quaternion (w, x, y,
+        z) from its body frame to the world (the identity for a point mass); None where the
+        scene has no rigid body."""
+        return self._run.orientations
+
+    @property
     def steps(self):
         """The step of each frame."""
         return self._run.frame_steps

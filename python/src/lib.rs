@@ -14,7 +14,7 @@ use lagra_run::marks::Spill;
 use lagra_run::restart::Restart;
 use lagra_run::run::{run, Options, Restarts, Watch};
 use lagra_run::thinned::Kept;
-use lagra_run::trace::{Format, Recorded, Writer};
+use lagra_run::trace::{rigid_bodies, Format, Recorded, Writer};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
@@ -316,9 +316,15 @@ impl PyScene {
         let (k, n) = (frames.steps.len(), frames.bodies);
         // the frames' storage becomes the arrays' (no copy)
         let shaped = |v: Vec<f64>| v.into_pyarray(py).reshape([k, n, 3]).map(Bound::unbind);
+        let rigid = rigid_bodies(&scene.model);
+        let orientations = orientations(&frames.turns, &rigid, k, n)
+            .map(|q| q.into_pyarray(py).reshape([k, n, 4]).map(Bound::unbind))
+            .transpose()?;
         Ok(PyRun {
             report: json,
             trails,
+            orientations,
+            rigid,
             positions: shaped(frames.x)?,
             velocities: shaped(frames.v)?,
             frame_steps: frames.steps.into_pyarray(py).unbind(),
@@ -371,6 +377,12 @@ struct PyRun {
     positions: Py<PyArray3<f64>>,
     #[pyo3(get)]
     velocities: Py<PyArray3<f64>>,
+    /// Each frame's orientation of every body (w, x, y, z), the identity for a point mass; None
+    /// where the scene has no rigid body.
+    #[pyo3(get)]
+    orientations: Option<Py<PyArray3<f64>>>,
+    /// The rigid bodies' indices (whose orientations a trace carries).
+    rigid: Vec<usize>,
     #[pyo3(get)]
     frame_steps: Py<PyArray1<u64>>,
     #[pyo3(get)]
@@ -394,15 +406,42 @@ impl PyRun {
             energies: self.energies.bind(py).readonly().as_slice()?.to_vec(),
             x: x.as_slice()?.to_vec(),
             v: v.as_slice()?.to_vec(),
+            turns: match &self.orientations {
+                Some(q) => {
+                    let q = q.bind(py).readonly();
+                    let q = q.as_slice()?;
+                    let n = x.shape()[1];
+                    (0..x.shape()[0])
+                        .flat_map(|k| self.rigid.iter().flat_map(move |&b| &q[4 * (k * n + b)..4 * (k * n + b) + 4]))
+                        .copied()
+                        .collect()
+                }
+                None => vec![],
+            },
         };
         let file = std::fs::File::create(&path)
             .map_err(|e| PyOSError::new_err(format!("cannot create {}: {e}", path.display())))?;
-        let mut w = Writer { out: std::io::BufWriter::new(file), format, cell: self.cell };
+        let mut w = Writer { out: std::io::BufWriter::new(file), format, cell: self.cell, rigid: self.rigid.clone() };
         frames
             .replay(&mut w)
             .and_then(|_| std::io::Write::flush(&mut w.out))
             .map_err(|e| PyOSError::new_err(e.to_string()))
     }
+}
+
+/// Every body's orientation in each of `k` frames of `n` bodies, flat (the identity for a point
+/// mass), from the rigid bodies' (`turns`, four numbers each, `rigid` saying whose); none
+/// without a rigid body.
+fn orientations(turns: &[f64], rigid: &[usize], k: usize, n: usize) -> Option<Vec<f64>> {
+    if rigid.is_empty() {
+        return None;
+    }
+    let mut q: Vec<f64> = std::iter::repeat_n([1.0, 0.0, 0.0, 0.0], k * n).flatten().collect();
+    for (at, turn) in turns.chunks_exact(4).enumerate() {
+        let (frame, body) = (at / rigid.len(), rigid[at % rigid.len()]);
+        q[4 * (frame * n + body)..4 * (frame * n + body) + 4].copy_from_slice(turn);
+    }
+    Some(q)
 }
 
 /// `lagra-check CERTIFICATE [--states STATES]`: (exit code, stdout, stderr).

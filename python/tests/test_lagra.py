@@ -229,6 +229,26 @@ def test_the_command_writes_the_same_formats(tmp_path):
     assert frames[-1].info["step"] == 500
 
 
+def test_rigid_bodies_have_their_orientations_in_the_arrays_and_the_files(tmp_path):
+    ase_io = pytest.importorskip("ase.io")
+    top = SCENES / "spinning_top.lagra"
+    r = lagra.Scene.from_file(top).run(steps=2000)
+    q = r.orientations
+    assert q.shape == (r.positions.shape[0], 1, 4)
+    assert np.allclose(np.linalg.norm(q, axis=2), 1.0, rtol=0, atol=1e-12)
+    assert not np.allclose(q[0], q[-1]), "the brick turns"
+    # the files carry them, the same bits as the command's trace
+    path = tmp_path / "top.xyz"
+    r.write(path)
+    frames = ase_io.read(path, index=":")
+    assert np.array_equal(frames[-1].arrays["quaternions"][0], q[-1][0])
+    command = tmp_path / "command.xyz"
+    assert cli("run", top, "--steps", 2000, "--trace", command).returncode in (0, 1)
+    assert command.read_text() == path.read_text()
+    # point masses have none
+    assert lagra.Scene.from_file(SCENES / "kepler.lagra").run(steps=10).orientations is None
+
+
 def test_a_thermostatted_run_has_its_observables():
     r = lagra.Scene.from_file(SCENES / "lj_nvt.lagra").run(steps=2000)
     o = r.observables

@@ -71,6 +71,8 @@ struct Frame {
     energy: f64,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
+    /// The rigid bodies' orientations.
+    turns: Vec<[f64; 4]>,
 }
 
 /// Frames kept in memory within a budget of bytes (thinned past it), for a notebook's arrays.
@@ -100,6 +102,7 @@ impl Kept {
             r.energies.push(f.energy);
             r.x.extend(f.x.iter().flatten());
             r.v.extend(f.v.iter().flatten());
+            r.turns.extend(f.turns.iter().flatten());
         }
         r
     }
@@ -107,10 +110,11 @@ impl Kept {
 
 impl Frames for Kept {
     fn frame(&mut self, s: &State, energy: f64) -> std::io::Result<()> {
-        let per_frame = 48 * s.x.len() + 24;
+        let per_frame = 48 * s.x.len() + 32 * s.spin.len() + 24;
         let budget = self.budget;
         let frames = self.frames.get_or_insert_with(|| Thinned::new(budget / per_frame));
-        frames.push(Frame { step: s.step, t: s.t, energy, x: s.x.clone(), v: s.v.clone() });
+        let turns = s.spin.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect();
+        frames.push(Frame { step: s.step, t: s.t, energy, x: s.x.clone(), v: s.v.clone(), turns });
         Ok(())
     }
 }

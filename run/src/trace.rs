@@ -3,7 +3,7 @@
 //! written in the shortest form that reads back to the same binary64, so a reader gets the
 //! exact state.
 
-use lagra_checker::model::Cell;
+use lagra_checker::model::{Cell, Model};
 use lagra_kernel::state::State;
 use serde::Serialize;
 use std::io::{self, Write};
@@ -38,11 +38,38 @@ impl Format {
     }
 }
 
-/// Frames written to `out` in `format`; `cell` is the scene's box, if it has one.
+/// Frames written to `out` in `format`; `cell` is the scene's box, if it has one; `rigid` the
+/// rigid bodies' indices, in body order (a state's `spin[k]` is body `rigid[k]`'s).
 pub struct Writer<W: Write> {
     pub out: W,
     pub format: Format,
     pub cell: Option<Cell>,
+    pub rigid: Vec<usize>,
+}
+
+impl<W: Write> Writer<W> {
+    /// A writer of the frames of a run of `model`.
+    pub fn new(out: W, format: Format, model: &Model) -> Writer<W> {
+        Writer { out, format, cell: model.cell, rigid: rigid_bodies(model) }
+    }
+
+    /// Every body's orientation (w, x, y, z), from its body frame to the world, the identity for
+    /// a point mass; none where the model has no rigid body (the frame is then as it always was).
+    fn orientations(&self, s: &State) -> Option<Vec<[f64; 4]>> {
+        if self.rigid.is_empty() {
+            return None;
+        }
+        let mut q = vec![[1.0, 0.0, 0.0, 0.0]; s.x.len()];
+        for (&b, spin) in self.rigid.iter().zip(&s.spin) {
+            q[b] = [spin[0], spin[1], spin[2], spin[3]];
+        }
+        Some(q)
+    }
+}
+
+/// The indices of a model's rigid bodies, in body order.
+pub fn rigid_bodies(model: &Model) -> Vec<usize> {
+    (0..model.bodies.len()).filter(|&i| model.bodies[i].moments.is_some()).collect()
 }
 
 #[derive(Serialize)]
@@ -52,14 +79,18 @@ struct Line<'a> {
     energy: f64,
     x: &'a [[f64; 3]],
     v: &'a [[f64; 3]],
+    /// Each body's orientation, where the scene has rigid bodies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    q: Option<Vec<[f64; 4]>>,
 }
 
 impl<W: Write> Frames for Writer<W> {
     fn frame(&mut self, s: &State, energy: f64) -> io::Result<()> {
+        let q = self.orientations(s);
         let w = &mut self.out;
         match self.format {
             Format::Jsonl => {
-                serde_json::to_writer(&mut *w, &Line { step: s.step, t: s.t, energy, x: &s.x, v: &s.v })?;
+                serde_json::to_writer(&mut *w, &Line { step: s.step, t: s.t, energy, x: &s.x, v: &s.v, q })?;
                 writeln!(w)
             }
             Format::Xyz => {
@@ -72,13 +103,16 @@ impl<W: Write> Frames for Writer<W> {
                     }
                     None => String::new(),
                 };
+                // orientations as ASE names them (its readers' `quaternions` array)
+                let turned = if q.is_some() { ":quaternions:R:4" } else { "" };
                 writeln!(
                     w,
-                    "{lattice}Properties=species:S:1:pos:R:3:velo:R:3 step={} time={} energy={energy}",
+                    "{lattice}Properties=species:S:1:pos:R:3:velo:R:3{turned} step={} time={} energy={energy}",
                     s.step, s.t
                 )?;
-                for (x, v) in s.x.iter().zip(&s.v) {
-                    writeln!(w, "X {} {} {} {} {} {}", N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
+                for (i, (x, v)) in s.x.iter().zip(&s.v).enumerate() {
+                    write!(w, "X {} {} {} {} {} {}", N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
+                    quaternion(w, q.as_deref(), i)?;
                 }
                 Ok(())
             }
@@ -98,14 +132,25 @@ impl<W: Write> Frames for Writer<W> {
                 for (lo, hi, _) in bounds {
                     writeln!(w, "{} {}", N(lo), N(hi))?;
                 }
-                // unwrapped positions: Lagra never wraps a body into the box
-                writeln!(w, "ITEM: ATOMS id type xu yu zu vx vy vz")?;
+                // unwrapped positions: Lagra never wraps a body into the box; orientations as
+                // LAMMPS's dump custom names an ellipsoid's (body frame to space frame)
+                let turned = if q.is_some() { " quatw quati quatj quatk" } else { "" };
+                writeln!(w, "ITEM: ATOMS id type xu yu zu vx vy vz{turned}")?;
                 for (i, (x, v)) in s.x.iter().zip(&s.v).enumerate() {
-                    writeln!(w, "{} 1 {} {} {} {} {} {}", i + 1, N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
+                    write!(w, "{} 1 {} {} {} {} {} {}", i + 1, N(x[0]), N(x[1]), N(x[2]), N(v[0]), N(v[1]), N(v[2]))?;
+                    quaternion(w, q.as_deref(), i)?;
                 }
                 Ok(())
             }
         }
+    }
+}
+
+/// Ends a body's line: its orientation's four numbers first, where there are orientations.
+fn quaternion(w: &mut impl Write, q: Option<&[[f64; 4]]>, i: usize) -> io::Result<()> {
+    match q {
+        Some(q) => writeln!(w, " {} {} {} {}", N(q[i][0]), N(q[i][1]), N(q[i][2]), N(q[i][3])),
+        None => writeln!(w),
     }
 }
 
@@ -184,6 +229,8 @@ pub struct Recorded {
     pub energies: Vec<f64>,
     pub x: Vec<f64>,
     pub v: Vec<f64>,
+    /// Each frame's rigid bodies' orientations (w, x, y, z), four numbers a rigid body.
+    pub turns: Vec<f64>,
 }
 
 impl Frames for Recorded {
@@ -194,6 +241,7 @@ impl Frames for Recorded {
         self.energies.push(energy);
         self.x.extend(s.x.iter().flatten());
         self.v.extend(s.v.iter().flatten());
+        self.turns.extend(s.spin.iter().flat_map(|r| &r[..4]));
         Ok(())
     }
 }
@@ -204,6 +252,14 @@ impl Recorded {
         let n = self.bodies;
         let vecs =
             |a: &[f64], k: usize| a[3 * k * n..3 * (k + 1) * n].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let rigid = self.turns.len() / (4 * self.steps.len()).max(1);
+        // (a writer reads a spin's orientation only: its angular momentum is left zero)
+        let spins = |k: usize| {
+            self.turns[4 * k * rigid..4 * (k + 1) * rigid]
+                .chunks_exact(4)
+                .map(|q| [q[0], q[1], q[2], q[3], 0.0, 0.0, 0.0])
+                .collect()
+        };
         for k in 0..self.steps.len() {
             let s = State {
                 step: self.steps[k],
@@ -211,7 +267,7 @@ impl Recorded {
                 x: vecs(&self.x, k),
                 v: vecs(&self.v, k),
                 chain: vec![],
-                spin: vec![],
+                spin: spins(k),
             };
             to.frame(&s, self.energies[k])?;
         }
@@ -235,7 +291,7 @@ mod tests {
     }
 
     fn written(format: Format, cell: Option<Cell>) -> String {
-        let mut w = Writer { out: vec![], format, cell };
+        let mut w = Writer { out: vec![], format, cell, rigid: vec![] };
         w.frame(&state(), -1.5).unwrap();
         String::from_utf8(w.out).unwrap()
     }
@@ -265,11 +321,38 @@ mod tests {
         ));
     }
 
+    /// A scene with a rigid body: every format carries each body's orientation (the identity
+    /// for a point mass), as its readers name it; exact numbers.
+    #[test]
+    fn orientations_go_wherever_the_state_goes() {
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let turned = State { spin: vec![[c, 0.0, 0.0, s, 0.0, 0.0, 0.5]], ..state() };
+        let write = |format| {
+            let mut w = Writer { out: vec![], format, cell: None, rigid: vec![1] };
+            w.frame(&turned, -1.5).unwrap();
+            String::from_utf8(w.out).unwrap()
+        };
+        let line: serde_json::Value = serde_json::from_str(&write(Format::Jsonl)).unwrap();
+        assert_eq!(line["q"], serde_json::json!([[1.0, 0.0, 0.0, 0.0], [c, 0.0, 0.0, s]]));
+        let xyz = write(Format::Xyz);
+        assert!(xyz.contains("Properties=species:S:1:pos:R:3:velo:R:3:quaternions:R:4 "), "{xyz}");
+        assert!(xyz.ends_with(&format!("X 3 4 5 0.5 0.25 0.125 {c} 0 0 {s}\n")), "{xyz}");
+        let dump = write(Format::LammpsDump);
+        assert!(
+            dump.contains(
+                "ITEM: ATOMS id type xu yu zu vx vy vz quatw quati quatj quatk\n1 1 0.1 -2.5 1e-300 1 0 -1 1 0 0 0\n"
+            ),
+            "{dump}"
+        );
+        // without rigid bodies, the frames are as they always were
+        assert!(!written(Format::Jsonl, None).contains("\"q\""));
+    }
+
     /// Frames written behind, on the writer's thread, are the bytes written in place.
     #[test]
     fn frames_written_behind_are_the_same_bytes() {
-        let mut here = Writer { out: vec![], format: Format::Jsonl, cell: None };
-        let mut behind = Behind::new(Writer { out: vec![], format: Format::Jsonl, cell: None });
+        let mut here = Writer { out: vec![], format: Format::Jsonl, cell: None, rigid: vec![] };
+        let mut behind = Behind::new(Writer { out: vec![], format: Format::Jsonl, cell: None, rigid: vec![] });
         for k in 0..50 {
             let s = State { step: k, ..state() };
             here.frame(&s, k as f64).unwrap();
@@ -303,14 +386,17 @@ mod tests {
 
     #[test]
     fn recorded_frames_replay_to_the_same_text() {
+        // a point mass and a rigid body, turning
+        let turned = |k: u64| State { step: k, spin: vec![[0.6, 0.0, 0.8, 0.0, 1.0, 2.0, 3.0]], ..state() };
         let mut r = Recorded::default();
-        r.frame(&state(), -1.5).unwrap();
-        r.frame(&State { step: 8, ..state() }, -1.25).unwrap();
-        let mut direct = Writer { out: vec![], format: Format::Jsonl, cell: None };
-        direct.frame(&state(), -1.5).unwrap();
-        direct.frame(&State { step: 8, ..state() }, -1.25).unwrap();
-        let mut again = Writer { out: vec![], format: Format::Jsonl, cell: None };
+        r.frame(&turned(7), -1.5).unwrap();
+        r.frame(&State { spin: vec![[0.0, 1.0, 0.0, 0.0, 1.0, 2.0, 3.0]], ..turned(8) }, -1.25).unwrap();
+        let writer = || Writer { out: vec![], format: Format::Jsonl, cell: None, rigid: vec![1] };
+        let mut direct = writer();
+        direct.frame(&turned(7), -1.5).unwrap();
+        direct.frame(&State { spin: vec![[0.0, 1.0, 0.0, 0.0, 1.0, 2.0, 3.0]], ..turned(8) }, -1.25).unwrap();
+        let mut again = writer();
         r.replay(&mut again).unwrap();
-        assert_eq!(direct.out, again.out);
+        assert_eq!(String::from_utf8(direct.out).unwrap(), String::from_utf8(again.out).unwrap());
     }
 }

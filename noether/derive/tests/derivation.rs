@@ -131,7 +131,7 @@ fn verdicts_are_the_physics(t: &Table) {
 fn charges_agree_with_the_checker(t: &Table, path: &Path) {
     let source = std::fs::read_to_string(path).unwrap();
     let scene = compile(&source).unwrap_or_else(|d| panic!("{}", d.render(&path.display().to_string(), &source)));
-    let mut trace = Writer { out: vec![], format: Format::Jsonl, cell: scene.model.cell };
+    let mut trace = Writer::new(vec![], Format::Jsonl, &scene.model);
     let steps = scene.solver.steps.min(200);
     let opts = Options { trace: Some(&mut trace), ..Options::plain(Some(steps)) };
     run(&scene, opts).unwrap();
