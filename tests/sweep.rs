@@ -118,7 +118,9 @@ fn a_stopped_sweep_reports_what_it_saw_and_no_more() {
         .spawn()
         .unwrap();
     // the first variant's report file is made just before its run starts
+    let waited = std::time::Instant::now();
     while !dir.path().join("v0.json").exists() {
+        assert!(waited.elapsed().as_secs() < 120, "the sweep never started its first variant");
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
     std::thread::sleep(std::time::Duration::from_millis(500));
