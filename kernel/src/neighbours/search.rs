@@ -1,0 +1,261 @@
+//! A build's passes over the bodies (`Neighbours::build`): the columns they are binned into and
+//! cut into clusters along z, and the search for the cluster pairs within reach + skin, column
+//! by column. Like the list itself, everything here depends on the positions alone.
+
+use super::{Cluster, Pair, CENTRE, EMPTY, LANES};
+use crate::lanes::{norm2, F64x4, Lane};
+use crate::step::BLOCK;
+use lagra_checker::model::Cell;
+use rayon::prelude::*;
+use rayon::ThreadPool;
+use std::ops::Range;
+
+/// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
+/// own: the same values either way).
+pub(super) fn each<U: Send>(spread: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
+    match spread {
+        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
+        None => (0..n).map(f).collect(),
+    }
+}
+
+/// Where empty slots sit: 10 r beyond the farthest coordinate of any body, 4 r apart along x,
+/// so that no body and no other empty slot is within r of one, the bodies' moves between builds
+/// (less than the skin) included, and no distance to one squares into a subnormal's range.
+pub(super) fn far(w: &[[f64; 3]], r: f64, spread: Option<&ThreadPool>) -> impl Fn(usize) -> [f64; 3] {
+    let largest = |p: &[f64; 3]| p.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    // (the largest of a set is the same however it is split)
+    let base = match spread {
+        Some(pool) => pool.install(|| w.par_iter().with_min_len(BLOCK).map(largest).reduce(|| 0.0, f64::max)),
+        None => w.iter().map(largest).fold(0.0, f64::max),
+    } + 10.0 * r
+        + 1.0;
+    move |slot| [base + 4.0 * r * slot as f64, base, base]
+}
+
+/// An axis-aligned box around a cluster's bodies.
+#[derive(Clone, Copy)]
+pub(super) struct Bounds {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Bounds {
+    pub(super) fn of<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> Bounds {
+        points.fold(Bounds { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] }, |b, p| Bounds {
+            lo: std::array::from_fn(|a| b.lo[a].min(p[a])),
+            hi: std::array::from_fn(|a| b.hi[a].max(p[a])),
+        })
+    }
+}
+
+/// Columns along x and y over the box (periodic axes) or over the bodies' extent (open axes).
+pub(super) struct Columns {
+    n: [usize; 2],
+    lo: [f64; 2],
+    width: [f64; 2],
+    /// Box lengths along periodic axes (x, y, z), 0 along open ones.
+    period: [f64; 3],
+}
+
+impl Columns {
+    pub(super) fn new(w: &[[f64; 3]], cell: &Option<Cell>) -> Columns {
+        let period: [f64; 3] = std::array::from_fn(|a| cell.filter(|c| c.periodic[a]).map_or(0.0, |c| c.size[a]));
+        let span = |a: usize| {
+            if period[a] > 0.0 {
+                (0.0, period[a])
+            } else {
+                let (lo, hi) =
+                    w.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p[a]), h.max(p[a])));
+                (lo, (hi - lo).max(f64::MIN_POSITIVE))
+            }
+        };
+        let (x, y, z) = (span(0), span(1), span(2));
+        // four bodies to a cube of side (4V/N)^(1/3); no more columns than a quarter of the
+        // bodies, however flat or thin their spread (the last two bounds)
+        let per = w.len() as f64 / LANES as f64;
+        let side = (x.1 * y.1 * z.1 / per).cbrt().max((x.1 * y.1 / per).sqrt()).max(x.1.max(y.1) / per);
+        let count = |side: f64, len: f64| ((len / side).floor() as usize).clamp(1, 1 << 20);
+        let n = [count(side, x.1), count(side, y.1)];
+        Columns { n, lo: [x.0, y.0], width: [x.1 / n[0] as f64, y.1 / n[1] as f64], period }
+    }
+
+    /// How many columns along axis a can hold a body within r of a body in a given column (no
+    /// more than the columns there are: a flat spread has columns thinner than r).
+    fn reach(&self, a: usize, r: f64) -> i64 {
+        ((r / self.width[a]).floor() as i64).min(self.n[a] as i64) + 1
+    }
+
+    fn index(&self, a: usize, u: f64) -> usize {
+        (((u - self.lo[a]) / self.width[a]).floor().max(0.0) as usize).min(self.n[a] - 1)
+    }
+
+    /// The bodies by slot, columns in order, each column's sorted by z and cut into clusters;
+    /// and each column's first cluster (one more entry, the total, at the end).
+    pub(super) fn clusters(&self, w: &[[f64; 3]], spread: Option<&ThreadPool>) -> (Vec<u32>, Vec<usize>) {
+        let columns = self.n[0] * self.n[1];
+        let column: Vec<usize> = each(spread, w.len(), |i| self.index(0, w[i][0]) + self.n[0] * self.index(1, w[i][1]));
+        let mut count = vec![0usize; columns + 1];
+        column.iter().for_each(|&c| count[c + 1] += 1);
+        for c in 0..columns {
+            count[c + 1] += count[c];
+        }
+        let mut order = vec![0u32; w.len()];
+        let mut next = count.clone();
+        for (i, &c) in column.iter().enumerate() {
+            order[next[c]] = i as u32;
+            next[c] += 1;
+        }
+        // each column's run sorted by z (then by body: a total order, so the same runs however
+        // the columns are shared out)
+        let mut runs: Vec<&mut [u32]> = Vec::with_capacity(columns);
+        let mut rest = &mut order[..];
+        for c in 0..columns {
+            let (run, tail) = rest.split_at_mut(count[c + 1] - count[c]);
+            runs.push(run);
+            rest = tail;
+        }
+        let by_z = |run: &mut &mut [u32]| {
+            run.sort_unstable_by(|&a, &b| w[a as usize][2].total_cmp(&w[b as usize][2]).then(a.cmp(&b)))
+        };
+        match spread {
+            Some(pool) => pool.install(|| runs.par_iter_mut().for_each(by_z)),
+            None => runs.iter_mut().for_each(by_z),
+        }
+        let (mut slots, mut first) = (Vec::with_capacity(w.len() + LANES * columns), Vec::with_capacity(columns + 1));
+        for c in 0..columns {
+            let run = &order[count[c]..count[c + 1]];
+            first.push(slots.len() / LANES);
+            slots.extend_from_slice(run);
+            slots.resize(slots.len().next_multiple_of(LANES), EMPTY);
+        }
+        first.push(slots.len() / LANES);
+        (slots, first)
+    }
+}
+
+/// Where the search of each neighbouring column (offset along x and y, image along z) has got
+/// to, for the i-clusters of one column, taken in z order.
+struct Cursors {
+    at: Vec<(usize, usize)>,
+    ny: usize,
+    reach: [usize; 2],
+}
+
+/// What the pair search reads: the clusters by column, their boxes and positions.
+pub(super) struct Search<'a> {
+    pub(super) columns: &'a Columns,
+    pub(super) first: &'a [usize],
+    pub(super) boxes: &'a [Bounds],
+    pub(super) x: &'a [Cluster],
+    pub(super) shifts: &'a [[f64; 3]; 32],
+    pub(super) r: f64,
+}
+
+impl Search<'_> {
+    /// The i-clusters `part`: where each one's pairs start (from 0) and the pairs.
+    pub(super) fn part(&self, part: Range<usize>) -> (Vec<usize>, Vec<Pair>) {
+        let (mut start, mut pairs) = (vec![], vec![]);
+        let mut column = self.first.partition_point(|&f| f <= part.start) - 1;
+        let reach = [0, 1].map(|a| self.columns.reach(a, self.r) as usize);
+        let mut cursors = Cursors { at: vec![], ny: 2 * reach[1] + 1, reach };
+        for ic in part {
+            if self.first[column + 1] <= ic || cursors.at.is_empty() {
+                while self.first[column + 1] <= ic {
+                    column += 1;
+                }
+                cursors.at = vec![(0, 0); (2 * reach[0] + 1) * cursors.ny * 3];
+            }
+            start.push(pairs.len());
+            self.near(ic, column, &mut cursors, &mut pairs);
+        }
+        (start, pairs)
+    }
+
+    /// Whether some body of cluster `ic` lies within r of one of cluster `jc` moved by `s` (empty
+    /// slots are far from everything): boxes within r whose bodies are not (a third of them on a
+    /// dense liquid) are left out. Sixteen distances, no branch.
+    #[inline(always)]
+    fn touch(&self, ic: usize, jc: usize, s: &[f64; 3]) -> bool {
+        let (xi, xj) = (&self.x[ic], &self.x[jc]);
+        let xs = [xj[0] + s[0], xj[1] + s[1], xj[2] + s[2]];
+        let mut least = F64x4::splat(f64::INFINITY);
+        for a in 0..LANES {
+            let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
+            least = least.min(norm2(&d));
+        }
+        least.least() < self.r * self.r
+    }
+
+    /// The clusters whose boxes lie within r of cluster `ic`'s (in column `column`), each
+    /// cluster pair once: j after i, or i itself at the zero image or a later one.
+    fn near(&self, ic: usize, column: usize, cursors: &mut Cursors, out: &mut Vec<Pair>) {
+        let g = self.columns;
+        let b = &self.boxes[ic];
+        let (cx, cy) = ((column % g.n[0]) as i64, (column / g.n[0]) as i64);
+        // offsets along an axis: all within r of the column (and one wrap at most, since the
+        // box is longer than 2r); on an open axis, only columns that exist
+        let offsets = |a: usize, c: i64| {
+            let (n, reach) = (g.n[a] as i64, cursors.reach[a] as i64);
+            let (lo, hi) =
+                if g.period[a] > 0.0 { (c - reach, c + reach) } else { ((c - reach).max(0), (c + reach).min(n - 1)) };
+            // each with its place among the 2·reach + 1 offsets, for its cursors
+            (lo..=hi).map(move |j| (j.rem_euclid(n) as usize, j.div_euclid(n), (j - c + reach) as usize))
+        };
+        // along a periodic z, the image below (above) can reach only a box within r of the
+        // bottom (top) of the box
+        let z = g.period[2];
+        let z_images: &[i64] = match (z > 0.0 && b.lo[2] < self.r, z > 0.0 && b.hi[2] + self.r > z) {
+            (true, true) => &[-1, 0, 1],
+            (true, false) => &[-1, 0],
+            (false, true) => &[0, 1],
+            (false, false) => &[0],
+        };
+        for (jx, nx, ix) in offsets(0, cx) {
+            let sx = nx as f64 * g.period[0];
+            let (lo, hi) = (g.lo[0] + jx as f64 * g.width[0] + sx, g.lo[0] + (jx + 1) as f64 * g.width[0] + sx);
+            let gx = (lo - b.hi[0]).max(b.lo[0] - hi).max(0.0);
+            for (jy, ny, iy) in offsets(1, cy) {
+                let sy = ny as f64 * g.period[1];
+                let (lo, hi) = (g.lo[1] + jy as f64 * g.width[1] + sy, g.lo[1] + (jy + 1) as f64 * g.width[1] + sy);
+                let gy = (lo - b.hi[1]).max(b.lo[1] - hi).max(0.0);
+                if gx * gx + gy * gy >= self.r * self.r {
+                    continue;
+                }
+                let col = jx + g.n[0] * jy;
+                // clusters are numbered column by column: an earlier column's come before ic's
+                if col < column {
+                    continue;
+                }
+                let run = &self.boxes[self.first[col]..self.first[col + 1]];
+                for &nz in z_images {
+                    let sz = nz as f64 * g.period[2];
+                    let image = (nx + 1) as usize + 3 * (ny + 1) as usize + 9 * (nz + 1) as usize;
+                    let s = &self.shifts[image];
+                    // the column's clusters are in z order, their lower and upper bounds both, and
+                    // so are ic's column's: the range only moves up, cluster by cluster
+                    let (from, to) = &mut cursors.at[((ix * cursors.ny) + iy) * 3 + (nz + 1) as usize];
+                    while *from < run.len() && run[*from].hi[2] + sz < b.lo[2] - self.r {
+                        *from += 1;
+                    }
+                    *to = (*to).max(*from);
+                    while *to < run.len() && run[*to].lo[2] + sz <= b.hi[2] + self.r {
+                        *to += 1;
+                    }
+                    // bodies within r imply boxes within r: the sixteen distances alone decide,
+                    // each candidate written and kept by advancing the end (no branch to miss)
+                    let base = self.first[col];
+                    let from = (*from + base).max(if image >= CENTRE { ic } else { ic + 1 });
+                    let to = *to + base;
+                    let mut end = out.len();
+                    out.resize(end + to.saturating_sub(from), Pair(0));
+                    for jc in from..to {
+                        out[end] = Pair::new(jc, image);
+                        end += usize::from(self.touch(ic, jc, s));
+                    }
+                    out.truncate(end);
+                }
+            }
+        }
+    }
+}
