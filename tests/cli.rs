@@ -320,6 +320,15 @@ fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
         assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
         assert!(stdout(&o).contains("plan        LennardJonesShifted: cluster-pair list"), "{}", stdout(&o));
         assert!(stdout(&o).contains("piece(s) by size"), "{}", stdout(&o));
+        // where the time went: four parts of the pair term's, together within the wall time
+        let out = stdout(&o);
+        let seconds = |after: &str| -> f64 {
+            let at = out.find(after).unwrap_or_else(|| panic!("no `{after}` in {out}")) + after.len();
+            out[at..].split(' ').next().unwrap().parse().unwrap()
+        };
+        let parts: Vec<f64> = ["time: builds ", "updates ", "pieces ", "sums "].iter().map(|p| seconds(p)).collect();
+        assert!(parts[0] > 0.0 && parts[2] > 0.0, "{parts:?}");
+        assert!(parts.iter().sum::<f64>() <= seconds("wall        ") + 0.002, "{parts:?}\n{out}");
         traces.push(std::fs::read(trace).unwrap());
     }
     assert!(traces[0].len() > 100_000);

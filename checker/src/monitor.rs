@@ -228,10 +228,11 @@ impl Monitor {
         self.threads
     }
 
-    /// How many steps before a checkpoint `foresee` is worth calling (`None`: never, no pair
-    /// term has a reach).
+    /// How many steps before a checkpoint `foresee` is worth calling (`None`: never, no claim
+    /// sums pairs — only energy does — or no pair term has a reach).
     pub fn foresight(&self) -> Option<u64> {
-        (!pair_reaches(&self.model).is_empty()).then_some(FORESIGHT)
+        let sums_pairs = self.tracks.iter().any(|t| t.claim.kind == ClaimKind::EnergyConservation);
+        (sums_pairs && !pair_reaches(&self.model).is_empty()).then_some(FORESIGHT)
     }
 
     /// Lists, from a state `foresight()` steps before a checkpoint, the pairs that checkpoint's
@@ -487,6 +488,17 @@ mod tests {
         let x = [[0.0; 3], [x1, 0.0, 0.0]];
         let v = [[v0, 0.0, 0.0], [0.0; 3]];
         m.observe(&Snapshot { step, t: step as f64, x: &x, v: &v, chain: &[], spin: &[] })
+    }
+
+    /// The pair lists made ahead serve the pair sums, which only energy reads.
+    #[test]
+    fn only_an_energy_claim_on_pair_terms_lists_ahead() {
+        let mut paired = model();
+        paired.terms.push(TermInstance { kind: Kind::LennardJones, sites: vec![], params: vec![1.0, 1.0, 2.5] });
+        let ahead = |m: &Model, kind| Monitor::new(m.clone(), vec![claim(kind, Some(1e-3), 1)], 3).unwrap().foresight();
+        assert_eq!(ahead(&paired, ClaimKind::EnergyConservation), Some(FORESIGHT));
+        assert_eq!(ahead(&paired, ClaimKind::MomentumConservation), None);
+        assert_eq!(ahead(&model(), ClaimKind::EnergyConservation), None);
     }
 
     #[test]

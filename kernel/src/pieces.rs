@@ -13,6 +13,7 @@
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering::Relaxed};
 
 /// Clusters a piece holds, about: enough work per piece that its halo (1.6 times its own
 /// clusters on the LJ liquid; 2.6 at 256 clusters a piece, which ran 7% slower on one thread)
@@ -56,64 +57,80 @@ impl Pieces {
             .collect();
         // a piece's halo in the order its pairs first reach each cluster; `seen[c]` holds the
         // last piece (plus one) that reached cluster c and where c went in it, so that no sort
-        // and no map is needed (one such table per worker, reused across its pieces)
-        let one = |seen: &mut Vec<(u32, u32)>, k: usize| {
+        // and no map is needed (one such table per worker, reused across its pieces). Each
+        // piece writes its pairs' places straight into its own run of `place`.
+        let mut place = vec![0u32; total];
+        let mut runs: Vec<&mut [u32]> = Vec::with_capacity(count);
+        let mut rest = &mut place[..];
+        for k in 0..count {
+            let (run, tail) = rest.split_at_mut(start[bounds[k + 1]] - start[bounds[k]]);
+            runs.push(run);
+            rest = tail;
+        }
+        let one = |seen: &mut Vec<(u32, u32)>, (k, run): (usize, &mut [u32])| {
             let own = bounds[k]..bounds[k + 1];
             let mut halo = vec![];
-            let place = (start[own.start]..start[own.end])
-                .map(|p| match j(p) {
+            for (p, at) in (start[own.start]..start[own.end]).zip(run.iter_mut()) {
+                *at = match j(p) {
                     c if own.contains(&c) => (c - own.start) as u32,
                     c => {
                         if seen[c].0 != k as u32 + 1 {
                             seen[c] = (k as u32 + 1, (own.len() + halo.len()) as u32);
-                            halo.push(c);
+                            halo.push(c as u32);
                         }
                         seen[c].1
                     }
-                })
-                .collect::<Vec<u32>>();
-            (halo, place)
+                };
+            }
+            halo
         };
         let table = || vec![(0u32, 0u32); clusters];
-        let cut: Vec<(Vec<usize>, Vec<u32>)> = match pool {
-            Some(p) if p.current_num_threads() > 1 => {
-                p.install(|| (0..count).into_par_iter().map_init(table, one).collect())
-            }
-            _ => {
+        let spread = pool.filter(|p| p.current_num_threads() > 1);
+        let halos: Vec<Vec<u32>> = match spread {
+            Some(p) => p.install(|| (0..count).into_par_iter().zip(runs).map_init(table, one).collect()),
+            None => {
                 let mut seen = table();
-                (0..count).map(|k| one(&mut seen, k)).collect()
+                (0..count).zip(runs).map(|kr| one(&mut seen, kr)).collect()
             }
         };
-        // each cluster's parts, in piece order
-        let mut first = vec![0usize; clusters + 1];
-        for (k, (halo, _)) in cut.iter().enumerate() {
-            for c in bounds[k]..bounds[k + 1] {
-                first[c + 1] += 1;
-            }
-            for &c in halo {
-                first[c + 1] += 1;
-            }
-        }
-        for c in 0..clusters {
-            first[c + 1] += first[c];
-        }
-        let mut next = first.clone();
-        let mut parts = vec![(0, 0); first[clusters]];
-        let mut put = |c: usize, k: usize, at: usize| {
-            parts[next[c]] = (k as u32, at as u32);
-            next[c] += 1;
+        let each_piece = |f: &(dyn Fn(usize) + Sync)| match spread {
+            Some(p) => p.install(|| (0..count).into_par_iter().for_each(f)),
+            None => (0..count).for_each(f),
         };
-        for (k, (halo, _)) in cut.iter().enumerate() {
+        // each cluster's parts: its own piece's place and one for each halo that holds it,
+        // counted and placed through atomic cursors (whose order varies with the threads), then
+        // each cluster's few parts sorted by piece (which does not)
+        let held: Vec<AtomicUsize> = (0..clusters).map(|_| AtomicUsize::new(1)).collect();
+        each_piece(&|k| halos[k].iter().for_each(|&c| _ = held[c as usize].fetch_add(1, Relaxed)));
+        let mut first = Vec::with_capacity(clusters + 1);
+        first.push(0);
+        for h in &held {
+            first.push(first.last().copied().unwrap_or(0) + h.load(Relaxed));
+        }
+        let cursor: Vec<AtomicUsize> = first[..clusters].iter().map(|&f| AtomicUsize::new(f)).collect();
+        let slots: Vec<AtomicU64> = (0..first[clusters]).map(|_| AtomicU64::new(0)).collect();
+        let put = |c: usize, k: usize, at: usize| {
+            slots[cursor[c].fetch_add(1, Relaxed)].store((k as u64) << 32 | at as u64, Relaxed)
+        };
+        each_piece(&|k| {
             let own = bounds[k]..bounds[k + 1];
-            for c in own.clone() {
-                put(c, k, c - own.start);
-            }
-            for (h, &c) in halo.iter().enumerate() {
-                put(c, k, own.len() + h);
-            }
+            own.clone().for_each(|c| put(c, k, c - own.start));
+            halos[k].iter().enumerate().for_each(|(h, &c)| put(c as usize, k, own.len() + h));
+        });
+        let mut parts: Vec<(u32, u32)> =
+            slots.into_iter().map(|s| s.into_inner()).map(|s| ((s >> 32) as u32, s as u32)).collect();
+        let mut by_cluster: Vec<&mut [(u32, u32)]> = Vec::with_capacity(clusters);
+        let mut rest = &mut parts[..];
+        for c in 0..clusters {
+            let (run, tail) = rest.split_at_mut(first[c + 1] - first[c]);
+            by_cluster.push(run);
+            rest = tail;
         }
-        let sizes = cut.iter().enumerate().map(|(k, (halo, _))| bounds[k + 1] - bounds[k] + halo.len()).collect();
-        let place = cut.into_iter().flat_map(|(_, place)| place).collect();
+        match spread {
+            Some(p) => p.install(|| by_cluster.par_iter_mut().for_each(|r| r.sort_unstable())),
+            None => by_cluster.iter_mut().for_each(|r| r.sort_unstable()),
+        }
+        let sizes = halos.iter().enumerate().map(|(k, halo)| bounds[k + 1] - bounds[k] + halo.len()).collect();
         Pieces { bounds, sizes, place, first, parts }
     }
 

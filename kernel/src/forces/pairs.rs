@@ -16,6 +16,7 @@ use lagra_checker::terms::Kind;
 use rayon::prelude::*;
 use std::marker::PhantomData;
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 pub struct Pairs<T: Paired> {
     name: &'static str,
@@ -43,6 +44,9 @@ pub struct Pairs<T: Paired> {
 struct Output {
     buffers: Vec<Vec<Cluster>>,
     summed: Vec<Cluster>,
+    /// Wall time in the pieces' work and in their sums by cluster (`--explain`).
+    worked: Duration,
+    gathered: Duration,
 }
 
 /// Below this many bodies a pair term loops over every pair: as fast, and nothing to keep.
@@ -134,12 +138,15 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             }
         };
         let mut output = self.output.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        let Output { buffers, summed } = &mut *output;
+        let Output { buffers, summed, worked, gathered } = &mut *output;
         buffers.resize_with(pieces.count(), Vec::new);
         summed.resize(l.clusters(), [F64x4::default(); 3]);
-        match &self.pool {
+        let working = Instant::now();
+        let mut gathering = working;
+        let done = match &self.pool {
             Some(pool) if pieces.count() > 1 => pool.install(|| {
                 let done = buffers.par_iter_mut().enumerate().map(zeroed).collect();
+                gathering = Instant::now();
                 summed
                     .par_iter_mut()
                     .enumerate()
@@ -150,11 +157,15 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
             }),
             _ => {
                 let done = buffers.iter_mut().enumerate().map(zeroed).collect();
+                gathering = Instant::now();
                 summed.iter_mut().enumerate().for_each(|(c, s)| *s = pieces.gather(c, buffers, add));
                 f.iter_mut().enumerate().for_each(|bf| give_back(bf, summed));
                 done
             }
-        }
+        };
+        *worked += gathering - working;
+        *gathered += gathering.elapsed();
+        done
     }
 
     /// Each instance's derivative, gathering what `wanted` names.
@@ -347,14 +358,20 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             Some(l) => {
                 let l = l.lock().unwrap_or_else(|p| p.into_inner());
                 let threads = self.pool.as_ref().map_or(1, |p| p.current_num_threads());
+                let o = self.output.lock().unwrap_or_else(|p| p.into_inner());
+                let s = |d: Duration| d.as_secs_f64();
                 format!(
-                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} piece(s) by size (halos: {:.2} buffer places a cluster) on {threads} thread(s)",
+                    "cluster-pair list ({LANES}×{LANES}, half: Newton's third law), {reach} + skin {:.3}, {} builds, {} cluster pairs over {} clusters; {} piece(s) by size (halos: {:.2} buffer places a cluster) on {threads} thread(s); time: builds {:.3} s, updates {:.3} s, pieces {:.3} s, sums {:.3} s",
                     l.skin,
                     l.builds,
                     l.count(),
                     l.clusters(),
                     l.pieces.count(),
                     l.pieces.spread(),
+                    s(l.spent.builds),
+                    s(l.spent.updates),
+                    s(o.worked),
+                    s(o.gathered),
                 )
             }
         }

@@ -20,9 +20,10 @@ use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
+use std::time::{Duration, Instant};
 
 mod search;
-use search::{each, far, Bounds, Columns, Search};
+use search::{each, far, joined, Bounds, Columns, Search};
 
 /// Bodies from which the passes over them spread over the pool's threads, a thread taking
 /// `BLOCK` at once (below, waking them costs more than the pass).
@@ -90,6 +91,18 @@ pub struct Neighbours {
     /// The i-clusters cut into pieces for the threads (`pieces`), with the list.
     pub pieces: Pieces,
     pub builds: u64,
+    /// Wall time on the calling thread in the list's passes (`--explain`).
+    pub spent: Spent,
+}
+
+/// Where a list's time went, as the calling thread's wall clock sees it: the builds, the part
+/// of them that runs on that thread alone whatever the pool (the serial fraction's share), and
+/// the updates between builds (the displacement test and the positions' gather).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spent {
+    pub builds: Duration,
+    pub serial: Duration,
+    pub updates: Duration,
 }
 
 impl Neighbours {
@@ -122,6 +135,7 @@ impl Neighbours {
             slot: vec![],
             pieces: Pieces::default(),
             builds: 0,
+            spent: Spent::default(),
         })
     }
 
@@ -141,6 +155,7 @@ impl Neighbours {
         // come within reach only if its two bodies together moved more than the skin, so the
         // two largest displacements decide (less often than "one body moved half the skin",
         // and as exact). The 1e-9 keeps the test on the safe side of rounding.
+        let updating = Instant::now();
         let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
         let top_two = |(first, second): (f64, f64), d2: f64| {
             if d2 > second {
@@ -166,8 +181,12 @@ impl Neighbours {
             }),
             None => x.iter().zip(&self.at).fold((0.0, 0.0), |t, pq| top_two(t, moved(pq))),
         };
+        let mut built = Duration::ZERO;
         if self.at.len() != x.len() || !(first.sqrt() + second.sqrt() < self.skin * (1.0 - 1e-9)) {
+            let building = Instant::now();
             self.build(x, cell, pool);
+            built = building.elapsed();
+            self.spent.builds += built;
         }
         let (bodies, offset) = (&self.bodies, &self.offset);
         let gather = |(c, cluster): (usize, &mut Cluster)| {
@@ -187,6 +206,7 @@ impl Neighbours {
             }
             None => self.x.iter_mut().enumerate().for_each(gather),
         }
+        self.spent.updates += updating.elapsed() - built;
     }
 
     /// The positions the list was last built at (empty before the first build): with them a
@@ -198,8 +218,7 @@ impl Neighbours {
     /// Builds the list at positions `x` (a restart's `built_at`, or the state's).
     pub fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
         let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
-        self.at.clear();
-        self.at.extend_from_slice(x);
+        self.at = each(spread, x.len(), |i| x[i]);
         let offset: Vec<[f64; 3]> = each(spread, x.len(), |i| match cell {
             None => [0.0; 3],
             Some(c) => {
@@ -234,8 +253,6 @@ impl Neighbours {
             r: self.reach + self.skin,
         };
         let n = boxes.len();
-        self.start.clear();
-        self.pairs.clear();
         // in parts, each listed on its own and joined in order: the same list as one pass makes;
         // as many as there are threads, or one per 1,024 clusters if more, so that a thread
         // done early takes another
@@ -245,12 +262,16 @@ impl Neighbours {
             Some(p) if parts > 1 => p.install(|| ranges.into_par_iter().map(|r| search.part(r)).collect()),
             _ => ranges.into_iter().map(|r| search.part(r)).collect(),
         };
-        for (s, p) in listed {
-            let base = self.pairs.len();
-            self.start.extend(s.into_iter().map(|k| k + base));
-            self.pairs.extend_from_slice(&p);
-        }
-        self.start.push(self.pairs.len());
+        let pairs: Vec<&[Pair]> = listed.iter().map(|(_, p)| &p[..]).collect();
+        self.pairs = joined(spread, &pairs, |_, p| p);
+        let mut base = vec![0];
+        base.extend(pairs.iter().scan(0, |total, p| {
+            *total += p.len();
+            Some(*total)
+        }));
+        // (each part's starts count from 0; a last part of one, 0 past the total, ends them)
+        let starts: Vec<&[usize]> = listed.iter().map(|(s, _)| &s[..]).chain([&[0][..]]).collect();
+        self.start = joined(spread, &starts, |part, k| k + base[part]);
         self.slot = vec![EMPTY; x.len()];
         for (slot, &b) in self.bodies.iter().enumerate() {
             if b != EMPTY {
@@ -378,6 +399,20 @@ mod tests {
             let one = built(1);
             assert!(one.2.len() > 3 * n, "{}", one.2.len());
             assert!(built(2) == one && built(3) == one && built(7) == one);
+        }
+    }
+
+    proptest! {
+        /// Parts joined on a pool are the parts one after another.
+        #[test]
+        fn parts_joined_on_any_pool_are_the_parts_in_order(lens in proptest::collection::vec(0usize..50, 0..12)) {
+            let parts: Vec<Vec<u64>> = lens.iter().enumerate().map(|(k, &n)| (0..n as u64).map(|v| v * 100 + k as u64).collect()).collect();
+            let parts: Vec<&[u64]> = parts.iter().map(|p| &p[..]).collect();
+            let want: Vec<u64> = parts.iter().enumerate().flat_map(|(k, p)| p.iter().map(move |v| v + 7 * k as u64)).collect();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+            for spread in [None, Some(&pool)] {
+                prop_assert_eq!(&joined(spread, &parts, |k, v| v + 7 * k as u64), &want);
+            }
         }
     }
 

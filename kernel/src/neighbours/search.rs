@@ -9,6 +9,7 @@ use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering::Relaxed};
 
 /// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
 /// own: the same values either way).
@@ -17,6 +18,39 @@ pub(super) fn each<U: Send>(spread: Option<&ThreadPool>, n: usize, f: impl Fn(us
         Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
         None => (0..n).map(f).collect(),
     }
+}
+
+/// The parts one after another, `map(part, value)` applied to each value, each part copied on
+/// the pool's threads if there is one: the same values either way.
+pub(super) fn joined<U: Copy + Send + Sync>(
+    spread: Option<&ThreadPool>,
+    parts: &[&[U]],
+    map: impl Fn(usize, U) -> U + Sync,
+) -> Vec<U> {
+    let Some(&[fill, ..]) = parts.iter().find(|p| !p.is_empty()).copied() else { return vec![] };
+    let n = parts.iter().map(|p| p.len()).sum();
+    // (filled on the threads too: a fill on one would be half the work)
+    let mut all = match spread {
+        Some(pool) => pool.install(|| {
+            let mut all = Vec::with_capacity(n);
+            all.par_extend(rayon::iter::repeat_n(fill, n));
+            all
+        }),
+        None => vec![fill; n],
+    };
+    let mut runs: Vec<&mut [U]> = Vec::with_capacity(parts.len());
+    let mut rest = &mut all[..];
+    for p in parts {
+        let (run, tail) = rest.split_at_mut(p.len());
+        runs.push(run);
+        rest = tail;
+    }
+    let copy = |(k, run): (usize, &mut [U])| run.iter_mut().zip(parts[k]).for_each(|(to, &from)| *to = map(k, from));
+    match spread {
+        Some(pool) => pool.install(|| runs.into_par_iter().enumerate().for_each(copy)),
+        None => runs.into_iter().enumerate().for_each(copy),
+    }
+    all
 }
 
 /// Where empty slots sit: 10 r beyond the farthest coordinate of any body, 4 r apart along x,
@@ -95,17 +129,24 @@ impl Columns {
     pub(super) fn clusters(&self, w: &[[f64; 3]], spread: Option<&ThreadPool>) -> (Vec<u32>, Vec<usize>) {
         let columns = self.n[0] * self.n[1];
         let column: Vec<usize> = each(spread, w.len(), |i| self.index(0, w[i][0]) + self.n[0] * self.index(1, w[i][1]));
+        // counted and dealt into the columns through atomic cursors (whose order within a column
+        // varies with the threads; the sort by z below puts it right)
+        let counts: Vec<AtomicUsize> = (0..columns).map(|_| AtomicUsize::new(0)).collect();
+        let deal = |f: &(dyn Fn(usize, usize) + Sync)| match spread {
+            Some(pool) => {
+                pool.install(|| column.par_iter().enumerate().with_min_len(BLOCK).for_each(|(i, &c)| f(i, c)))
+            }
+            None => column.iter().enumerate().for_each(|(i, &c)| f(i, c)),
+        };
+        deal(&|_, c| _ = counts[c].fetch_add(1, Relaxed));
         let mut count = vec![0usize; columns + 1];
-        column.iter().for_each(|&c| count[c + 1] += 1);
-        for c in 0..columns {
-            count[c + 1] += count[c];
+        for (c, n) in counts.iter().enumerate() {
+            count[c + 1] = count[c] + n.load(Relaxed);
         }
-        let mut order = vec![0u32; w.len()];
-        let mut next = count.clone();
-        for (i, &c) in column.iter().enumerate() {
-            order[next[c]] = i as u32;
-            next[c] += 1;
-        }
+        let next: Vec<AtomicUsize> = count[..columns].iter().map(|&c| AtomicUsize::new(c)).collect();
+        let dealt: Vec<AtomicU32> = each(spread, w.len(), |_| AtomicU32::new(0));
+        deal(&|i, c| dealt[next[c].fetch_add(1, Relaxed)].store(i as u32, Relaxed));
+        let mut order: Vec<u32> = each(spread, w.len(), |k| dealt[k].load(Relaxed));
         // each column's run sorted by z (then by body: a total order, so the same runs however
         // the columns are shared out)
         let mut runs: Vec<&mut [u32]> = Vec::with_capacity(columns);
@@ -122,14 +163,18 @@ impl Columns {
             Some(pool) => pool.install(|| runs.par_iter_mut().for_each(by_z)),
             None => runs.iter_mut().for_each(by_z),
         }
-        let (mut slots, mut first) = (Vec::with_capacity(w.len() + LANES * columns), Vec::with_capacity(columns + 1));
+        // each column's clusters, the last padded with empty slots
+        let mut first = Vec::with_capacity(columns + 1);
+        first.push(0);
         for c in 0..columns {
-            let run = &order[count[c]..count[c + 1]];
-            first.push(slots.len() / LANES);
-            slots.extend_from_slice(run);
-            slots.resize(slots.len().next_multiple_of(LANES), EMPTY);
+            first.push(first[c] + (count[c + 1] - count[c]).div_ceil(LANES));
         }
-        first.push(slots.len() / LANES);
+        let slots: Vec<[u32; LANES]> = each(spread, first[columns], |k| {
+            let c = first.partition_point(|&f| f <= k) - 1;
+            let run = &order[count[c]..count[c + 1]];
+            std::array::from_fn(|l| run.get(LANES * (k - first[c]) + l).copied().unwrap_or(EMPTY))
+        });
+        let slots = slots.into_flattened();
         (slots, first)
     }
 }
