@@ -154,11 +154,6 @@ impl F64x4 {
         let a = self.to_array();
         (a[0] + a[1]) + (a[2] + a[3])
     }
-    #[inline(always)]
-    pub fn least(self) -> f64 {
-        let a = self.to_array();
-        a[0].min(a[1]).min(a[2].min(a[3]))
-    }
 }
 
 impl Mask4 {
