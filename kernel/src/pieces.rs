@@ -60,13 +60,7 @@ impl Pieces {
         // and no map is needed (one such table per worker, reused across its pieces). Each
         // piece writes its pairs' places straight into its own run of `place`.
         let mut place = vec![0u32; total];
-        let mut runs: Vec<&mut [u32]> = Vec::with_capacity(count);
-        let mut rest = &mut place[..];
-        for k in 0..count {
-            let (run, tail) = rest.split_at_mut(start[bounds[k + 1]] - start[bounds[k]]);
-            runs.push(run);
-            rest = tail;
-        }
+        let places = runs(&mut place, (0..count).map(|k| start[bounds[k + 1]] - start[bounds[k]]));
         let one = |seen: &mut Vec<(u32, u32)>, (k, run): (usize, &mut [u32])| {
             let own = bounds[k]..bounds[k + 1];
             let mut halo = vec![];
@@ -87,10 +81,10 @@ impl Pieces {
         let table = || vec![(0u32, 0u32); clusters];
         let spread = pool.filter(|p| p.current_num_threads() > 1);
         let halos: Vec<Vec<u32>> = match spread {
-            Some(p) => p.install(|| (0..count).into_par_iter().zip(runs).map_init(table, one).collect()),
+            Some(p) => p.install(|| (0..count).into_par_iter().zip(places).map_init(table, one).collect()),
             None => {
                 let mut seen = table();
-                (0..count).zip(runs).map(|kr| one(&mut seen, kr)).collect()
+                (0..count).zip(places).map(|kr| one(&mut seen, kr)).collect()
             }
         };
         let each_piece = |f: &(dyn Fn(usize) + Sync)| match spread {
@@ -119,13 +113,7 @@ impl Pieces {
         });
         let mut parts: Vec<(u32, u32)> =
             slots.into_iter().map(|s| s.into_inner()).map(|s| ((s >> 32) as u32, s as u32)).collect();
-        let mut by_cluster: Vec<&mut [(u32, u32)]> = Vec::with_capacity(clusters);
-        let mut rest = &mut parts[..];
-        for c in 0..clusters {
-            let (run, tail) = rest.split_at_mut(first[c + 1] - first[c]);
-            by_cluster.push(run);
-            rest = tail;
-        }
+        let mut by_cluster = runs(&mut parts, first.windows(2).map(|w| w[1] - w[0]));
         match spread {
             Some(p) => p.install(|| by_cluster.par_iter_mut().for_each(|r| r.sort_unstable())),
             None => by_cluster.iter_mut().for_each(|r| r.sort_unstable()),
@@ -160,6 +148,19 @@ impl Pieces {
     pub fn spread(&self) -> f64 {
         self.parts.len() as f64 / (self.first.len() - 1).max(1) as f64
     }
+}
+
+/// `all` cut into consecutive runs of the given lengths, each to be written on its own (by
+/// another thread, say).
+pub fn runs<T>(all: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = all;
+    lengths
+        .map(|n| {
+            let (run, tail) = std::mem::take(&mut rest).split_at_mut(n);
+            rest = tail;
+            run
+        })
+        .collect()
 }
 
 #[cfg(test)]

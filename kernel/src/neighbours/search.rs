@@ -4,6 +4,7 @@
 
 use super::{Cluster, Pair, CENTRE, EMPTY, LANES};
 use crate::lanes::{norm2, F64x4, Lane};
+use crate::pieces::runs;
 use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
@@ -38,13 +39,7 @@ pub(super) fn joined<U: Copy + Send + Sync>(
         }),
         None => vec![fill; n],
     };
-    let mut runs: Vec<&mut [U]> = Vec::with_capacity(parts.len());
-    let mut rest = &mut all[..];
-    for p in parts {
-        let (run, tail) = rest.split_at_mut(p.len());
-        runs.push(run);
-        rest = tail;
-    }
+    let runs = runs(&mut all, parts.iter().map(|p| p.len()));
     let copy = |(k, run): (usize, &mut [U])| run.iter_mut().zip(parts[k]).for_each(|(to, &from)| *to = map(k, from));
     match spread {
         Some(pool) => pool.install(|| runs.into_par_iter().enumerate().for_each(copy)),
@@ -149,13 +144,7 @@ impl Columns {
         let mut order: Vec<u32> = each(spread, w.len(), |k| dealt[k].load(Relaxed));
         // each column's run sorted by z (then by body: a total order, so the same runs however
         // the columns are shared out)
-        let mut runs: Vec<&mut [u32]> = Vec::with_capacity(columns);
-        let mut rest = &mut order[..];
-        for c in 0..columns {
-            let (run, tail) = rest.split_at_mut(count[c + 1] - count[c]);
-            runs.push(run);
-            rest = tail;
-        }
+        let mut runs = runs(&mut order, count.windows(2).map(|w| w[1] - w[0]));
         let by_z = |run: &mut &mut [u32]| {
             run.sort_unstable_by(|&a, &b| w[a as usize][2].total_cmp(&w[b as usize][2]).then(a.cmp(&b)))
         };
