@@ -63,11 +63,11 @@ fn colliding_solids_keep_both_momenta() {
 }
 
 /// A box sliding on a floor with μ = 0.5 from 2 m/s stops after v²/(2μg) = 0.4077 m (Coulomb),
-/// and without friction it slides on at 2 m/s.
+/// and without friction it slides on at 2 m/s: under either contact solver.
 #[test]
 fn friction_stops_a_slide_where_coulomb_says() {
     let dir = tempfile::tempdir().unwrap();
-    let slide = |mu: f64| {
+    let slide = |mu: f64, integrator: &str| {
         let p = scene(
             dir.path(),
             "slide.lagra",
@@ -77,7 +77,7 @@ fn friction_stops_a_slide_where_coulomb_says() {
                    gravity {{ g: [0, -9.81, 0] }}
                    floor {{ y: 0, friction: {mu} }}
                    @expect no_penetration {{ tol: 1e-4 }}
-                   solver {{ dt: 0.001, duration: 1, steps_per_frame: 1000 }}
+                   solver {{ integrator: \"{integrator}\", dt: 0.001, duration: 1, steps_per_frame: 1000 }}
                  }}"
             ),
         );
@@ -88,11 +88,16 @@ fn friction_stops_a_slide_where_coulomb_says() {
             serde_json::from_str(std::fs::read_to_string(&trace).unwrap().lines().last().unwrap()).unwrap();
         (last["x"][0][0].as_f64().unwrap(), last["v"][0][0].as_f64().unwrap())
     };
-    let (x, v) = slide(0.5);
-    let expected = 4.0 / (2.0 * 0.5 * 9.81);
-    assert!((x - expected).abs() < 0.01 * expected && v.abs() < 1e-9, "stopped at {x} (Coulomb: {expected}), v {v}");
-    let (x, v) = slide(0.0);
-    assert!((v - 2.0).abs() < 1e-12 && (x - 2.0).abs() < 1e-9, "{x} {v}");
+    for integrator in ["sequential_impulses", "avbd"] {
+        let (x, v) = slide(0.5, integrator);
+        let expected = 4.0 / (2.0 * 0.5 * 9.81);
+        assert!(
+            (x - expected).abs() < 0.01 * expected && v.abs() < 1e-6,
+            "{integrator}: stopped at {x} (Coulomb: {expected}), v {v}"
+        );
+        let (x, v) = slide(0.0, integrator);
+        assert!((v - 2.0).abs() < 1e-9 && (x - 2.0).abs() < 1e-6, "{integrator}: {x} {v}");
+    }
 }
 
 /// Bad contact scenes: each refused with its line and column and a message that says why.

@@ -65,10 +65,15 @@ fn langevin_resumes_to_the_bit() {
     cut_in_three("scenes/validation/lj_t085_rho0001.lagra", 200, [33, 120]);
 }
 
-/// Sequential impulses carry their warm starts.
+/// Sequential impulses carry their warm starts; AVBD its multipliers and stiffnesses.
 #[test]
 fn contact_resumes_to_the_bit() {
     cut_in_three("scenes/block_stack.lagra", 300, [101, 202]);
+    let dir = tempfile::tempdir().unwrap();
+    let avbd = dir.path().join("block_stack_avbd.lagra");
+    let text = std::fs::read_to_string("scenes/block_stack.lagra").unwrap();
+    std::fs::write(&avbd, text.replace("solver { dt", "solver { integrator: \"avbd\", dt")).unwrap();
+    cut_in_three(avbd.to_str().unwrap(), 300, [101, 202]);
 }
 
 #[test]

@@ -189,6 +189,11 @@ impl LagrangianGraph {
         self.pool.as_deref().filter(|_| self.masses.len() >= SPREAD_FROM)
     }
 
+    /// The run's threads, if it has more than one (for a pass that spreads at any size).
+    pub fn pool(&self) -> Option<&rayon::ThreadPool> {
+        self.pool.as_deref()
+    }
+
     /// x += h·v.
     pub fn drift(&self, s: &mut State, h: f64) {
         step::drift(&mut s.x, &s.v, h);

@@ -13,6 +13,7 @@ pub enum Integrator {
     Rattle,
     ActionDescent,
     SequentialImpulses,
+    Avbd,
 }
 
 /// The settings a `solver` block may give beyond dt and the run length, each read by the
@@ -31,7 +32,7 @@ pub struct Settings {
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 8] = [
+    pub const ALL: [Integrator; 9] = [
         Integrator::VelocityVerlet,
         Integrator::SymplecticEuler,
         Integrator::Yoshida4,
@@ -40,6 +41,7 @@ impl Integrator {
         Integrator::Rattle,
         Integrator::ActionDescent,
         Integrator::SequentialImpulses,
+        Integrator::Avbd,
     ];
 
     pub fn name(self) -> &'static str {
@@ -52,6 +54,7 @@ impl Integrator {
             Integrator::Rattle => "rattle",
             Integrator::ActionDescent => "action_descent",
             Integrator::SequentialImpulses => "sequential_impulses",
+            Integrator::Avbd => "avbd",
         }
     }
 
@@ -72,13 +75,16 @@ impl Integrator {
             Integrator::SequentialImpulses => {
                 "contact and friction by sequential impulses; the default where solids touch"
             }
+            Integrator::Avbd => {
+                "contact and friction by augmented vertex block descent (implicit Euler, per-body Newton)"
+            }
         }
     }
 
     /// The order of the error in dt, as the theory gives it (`lagra bench precision` measures it).
     pub fn order(self) -> u32 {
         match self {
-            Integrator::SymplecticEuler | Integrator::SequentialImpulses => 1,
+            Integrator::SymplecticEuler | Integrator::SequentialImpulses | Integrator::Avbd => 1,
             Integrator::Yoshida4 | Integrator::Rk4 => 4,
             _ => 2,
         }
@@ -91,6 +97,7 @@ impl Integrator {
             Integrator::Rattle => &["tol", "iterations"],
             Integrator::ActionDescent => &["window", "iterations", "tol"],
             Integrator::SequentialImpulses => &["iterations", "substeps"],
+            Integrator::Avbd => &["iterations"],
             _ => &[],
         }
     }
@@ -100,6 +107,7 @@ impl Integrator {
         match self {
             Integrator::ActionDescent => Settings { tol: 1e-12, iterations: 1000, window: 16, substeps: 1 },
             Integrator::SequentialImpulses => Settings { tol: 0.0, iterations: 10, window: 1, substeps: 4 },
+            Integrator::Avbd => Settings { tol: 0.0, iterations: 10, window: 1, substeps: 1 },
             _ => Settings { tol: 1e-10, iterations: 1000, window: 1, substeps: 1 },
         }
     }
@@ -114,6 +122,11 @@ impl Integrator {
         } else {
             Integrator::VelocityVerlet
         }
+    }
+
+    /// Whether it keeps solids from passing through each other and the floor.
+    pub fn keeps_apart(self) -> bool {
+        matches!(self, Integrator::SequentialImpulses | Integrator::Avbd)
     }
 
     /// Whether this integrator can advance a model of these terms (and constraints, if
@@ -131,10 +144,12 @@ impl Integrator {
         if touching && constrained {
             return Err((None, "no solver keeps both distance constraints and contacts yet".into()));
         }
-        if touching && self != Integrator::SequentialImpulses {
+        if touching && !self.keeps_apart() {
             return Err((
                 None,
-                format!("{name} lets solids pass through each other and the floor: use `sequential_impulses`"),
+                format!(
+                    "{name} lets solids pass through each other and the floor: use `sequential_impulses` or `avbd`"
+                ),
             ));
         }
         if constrained && self != Integrator::Rattle {

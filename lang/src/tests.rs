@@ -145,7 +145,7 @@ fn solver_errors() {
     assert_eq!(error("steps: 10", "steps: 2.5"), at(5, 29, "solver.steps expects a whole number ≥ 1, got 2.5"));
     assert_eq!(
         error("dt: 0.01", "dt: 0.01, integrator: rk45"),
-        at(5, 34, "unknown integrator `rk45`; known: velocity_verlet, symplectic_euler, yoshida4, rk4, boris, rattle, action_descent, sequential_impulses")
+        at(5, 34, "unknown integrator `rk45`; known: velocity_verlet, symplectic_euler, yoshida4, rk4, boris, rattle, action_descent, sequential_impulses, avbd")
     );
     assert_eq!(compile(&GOOD.replace("steps: 10", "duration: 1")).unwrap().solver.steps, 100);
 }

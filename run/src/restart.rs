@@ -3,10 +3,11 @@
 //! reference state and running summaries, what the meters and the observer gathered — so that
 //! a run resumed from one takes the same steps, to the bit, as the run that wrote it would have.
 //!
-//! Layout: `lagra-restart/1\n` (16 bytes), the `Restart` in postcard (serde's compact binary
-//! form, every f64 as its eight bytes: every bit survives, infinities included), then the
-//! SHA-256 of every byte before it (32 bytes). A file is written to a temporary name beside its
-//! target, synced and renamed: it is whole or absent.
+//! Layout: `lagra-restart/2\n` (16 bytes; /2 since the solver carries AVBD's stiffnesses),
+//! the `Restart` in postcard (serde's compact binary form, every f64 as its eight bytes: every
+//! bit survives, infinities included), then the SHA-256 of every byte before it (32 bytes). A
+//! file is written to a temporary name beside its target, synced and renamed: it is whole or
+//! absent.
 
 use crate::observables::Observer;
 use crate::predict::Meter;
@@ -20,7 +21,7 @@ use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::Path;
 
-pub const MAGIC: &[u8; 16] = b"lagra-restart/1\n";
+pub const MAGIC: &[u8; 16] = b"lagra-restart/2\n";
 const DIGEST: usize = 32;
 
 #[derive(Serialize, Deserialize)]
@@ -58,7 +59,7 @@ impl Restart {
     /// Reads a restart file's bytes back, refusing anything but a whole, unedited one.
     pub fn from_bytes(bytes: &[u8]) -> Result<Restart, String> {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
-            return Err("not a lagra restart file (it does not start with `lagra-restart/1`)".into());
+            return Err("not a lagra restart file (it does not start with `lagra-restart/2`)".into());
         }
         if bytes.len() < MAGIC.len() + DIGEST {
             return Err(format!("truncated: {} bytes, shorter than any restart file", bytes.len()));
@@ -127,7 +128,7 @@ mod tests {
             setup: "fnv1a64:0".into(),
             planned_steps: 10,
             state: state.clone(),
-            solver: Carried { forces: vec![[0.5, 0.25, -1e300]], potential: 2.0, warm: vec![] },
+            solver: Carried { forces: vec![[0.5, 0.25, -1e300]], potential: 2.0, warm: vec![], stiffness: vec![] },
             lists: vec![None, Some(vec![[0.0; 3]])],
             monitor: monitor::Carried {
                 reference: Some(state),

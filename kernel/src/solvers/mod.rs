@@ -3,6 +3,7 @@
 //! state between steps; `Stepper` runs the one a scene chose.
 
 mod action_descent;
+mod avbd;
 mod boris;
 mod impulses;
 mod langevin;
@@ -113,11 +114,14 @@ pub struct Carried {
     /// Sequential impulses' warm starts: each touching pair's impulses (normal, two tangents)
     /// by place, in the order of the pairs.
     pub warm: Vec<((usize, usize), Vec<([f64; 3], [f64; 3])>)>,
+    /// AVBD's contact stiffnesses (the three rows'), in the order of `warm` (empty for any
+    /// other solver).
+    pub stiffness: Vec<Vec<[f64; 3]>>,
 }
 
 impl Carried {
     pub(crate) fn forces(at: &Evaluated) -> Carried {
-        Carried { forces: at.f.clone(), potential: at.potential, warm: vec![] }
+        Carried { forces: at.f.clone(), potential: at.potential, warm: vec![], stiffness: vec![] }
     }
     pub(crate) fn evaluated(&self) -> Evaluated {
         Evaluated { f: self.forces.clone(), potential: self.potential }
@@ -185,6 +189,10 @@ impl Stepper {
             Integrator::SequentialImpulses => {
                 let solids = g.solids().unwrap_or_else(|| Solids::none(s.x.len()));
                 Box::new(impulses::Impulses::new(at, solids, settings.substeps, settings.iterations))
+            }
+            Integrator::Avbd => {
+                let solids = g.solids().unwrap_or_else(|| Solids::none(s.x.len()));
+                Box::new(avbd::Avbd::new(at, solids, settings.iterations))
             }
         };
         Ok(Stepper { solver })
