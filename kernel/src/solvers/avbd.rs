@@ -193,18 +193,13 @@ impl Solver for Avbd {
                 b.moved = b.target;
             }
         }
-        let pool = g.pool();
-        let mut residual = 0.0;
-        for _ in 0..self.sweeps {
-            for colour in &rows.colours {
-                let moved = spread(pool, colour, |&i| descend(&bodies[i], &bodies, &contacts, &rows.of[i]));
-                for (&i, m) in colour.iter().zip(moved) {
-                    bodies[i].moved = m;
-                }
-            }
-            let frozen = &bodies;
-            residual = spread(pool, &mut contacts[..], |c| c.update(frozen)).into_iter().fold(0.0, f64::max);
-        }
+        // the sweeps run inside the pool, so that its threads pass from one colour to the next
+        // without sleeping between (called from outside for each colour, two threads were
+        // slower than one)
+        let residual = match g.pool() {
+            Some(pool) => pool.install(|| sweep(&mut bodies, &mut contacts, &rows, self.sweeps, true)),
+            None => sweep(&mut bodies, &mut contacts, &rows, self.sweeps, false),
+        };
         self.iterations.record(self.sweeps, residual);
         for ((b, p), (x, v)) in bodies.iter().zip(&start).zip(s.x.iter_mut().zip(s.v.iter_mut())) {
             let shift = b.moved.fixed_rows::<3>(0).into_owned();
@@ -351,15 +346,33 @@ impl Rows {
     }
 }
 
-/// `each` over the items, on the run's threads where it has them; the results in item order.
+/// `sweeps` rounds of block descent, colour by colour, each followed by the dual step; returns
+/// the overlap left beyond the target after the last.
+fn sweep(bodies: &mut [Body], contacts: &mut [Contact], rows: &Rows, sweeps: u32, parallel: bool) -> f64 {
+    let mut residual = 0.0;
+    for _ in 0..sweeps {
+        for colour in &rows.colours {
+            let frozen = &*bodies;
+            let moved = spread(parallel, colour, |&i| descend(&frozen[i], frozen, contacts, &rows.of[i]));
+            for (&i, m) in colour.iter().zip(moved) {
+                bodies[i].moved = m;
+            }
+        }
+        let frozen = &*bodies;
+        residual = spread(parallel, &mut *contacts, |c| c.update(frozen)).into_iter().fold(0.0, f64::max);
+    }
+    residual
+}
+
+/// `each` over the items, on the current pool's threads if `parallel`; the results in order.
 fn spread<T: Send + Sync, R: Send>(
-    pool: Option<&rayon::ThreadPool>,
+    parallel: bool,
     items: impl IntoParallelIterator<Item = T> + IntoIterator<Item = T> + Send,
     each: impl Fn(T) -> R + Sync + Send,
 ) -> Vec<R> {
-    match pool {
-        Some(pool) => pool.install(|| items.into_par_iter().map(each).collect()),
-        None => items.into_iter().map(each).collect(),
+    match parallel {
+        true => items.into_par_iter().map(each).collect(),
+        false => items.into_iter().map(each).collect(),
     }
 }
 
