@@ -43,7 +43,7 @@ type Move = Vector6<f64>;
 /// α: the share of a step's starting overlap left for later steps.
 const STABILISE: f64 = 0.95;
 /// γ: how much of last step's λ and k a persisting contact starts from. The authors use 0.99;
-/// on `scenes/bench/stack_1000.lagra` 0.9 left its fastest point at 4.5e-3 / 6.6e-3 (dt 0.005
+/// on `scenes/bench/stack_1000.lagra` 0.9 left its fastest point at 4.5e-3 / 4.7e-3 (dt 0.005
 /// / 0.01) against 4.8e-3 / 9.9e-3 with 0.99: a stiffness that stays high makes the sweeps
 /// carry load down a ten-block tower more slowly.
 const DECAY: f64 = 0.9;
