@@ -89,6 +89,7 @@ fn forces(c: &mut Criterion) {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         };
         let graph = LagrangianGraph::new(&model);
         let s = State { step: 0, t: 0.0, x: x.clone(), v: vec![[0.1, -0.2, 0.05]; n], chain: vec![], spin: vec![] };

@@ -19,17 +19,24 @@ fn root() -> &'static Path {
 
 /// A fresh certificate and state file of the oscillator.
 fn oscillator() -> Run {
+    run("scenes/oscillator.lagra", &[])
+}
+
+/// A fresh certificate and state file of a shipped scene, run with `args` besides.
+fn run(scene: &str, args: &[&str]) -> Run {
     let dir = tempfile::tempdir().unwrap();
-    let (cert, states) = (dir.path().join("osc.cert"), dir.path().join("osc.states"));
+    let (cert, states) = (dir.path().join("run.cert"), dir.path().join("run.states"));
     let o = Command::new(env!("CARGO_BIN_EXE_lagra"))
-        .args(["run", "scenes/oscillator.lagra", "--certificate"])
+        .args(["run", scene])
+        .args(args)
+        .arg("--certificate")
         .arg(&cert)
         .arg("--states")
         .arg(&states)
         .current_dir(root())
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
     Run { _dir: dir, cert, states }
 }
 
@@ -296,4 +303,19 @@ fn states_of_another_run_are_rejected() {
     let (code, _, err) = with_states(&a);
     assert_eq!(code, 2);
     assert!(err.contains("not the one written with this certificate"), "{err}");
+}
+
+/// A forger who moves one of a hinge's pins by a centimetre in the model, and re-seals: the
+/// re-check measures the gap of the pin as written against the states, finds it open from step
+/// 0, where an honest run would have halted, and refuses the states that go on.
+#[test]
+fn a_joint_pin_moved_in_the_certificate_fails_its_claim() {
+    let r = run("scenes/hinged_chain.lagra", &["--steps", "200", "--quiet"]);
+    let (code, out, _) = with_states(&r);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("joint_satisfied PASS"), "{out}");
+    edit_cert(&r, true, |c| c.model.pins[5].on_b[1] += 0.01);
+    let (code, out, err) = with_states(&r);
+    assert_eq!(code, 2, "{out}");
+    assert!(err.contains("must have halted at step 0: joint_satisfied is certainly violated"), "{out}{err}");
 }

@@ -65,9 +65,11 @@ fn langevin_resumes_to_the_bit() {
     cut_in_three("scenes/validation/lj_t085_rho0001.lagra", 200, [33, 120]);
 }
 
-/// Sequential impulses carry their warm starts; AVBD its multipliers and stiffnesses.
+/// Sequential impulses carry their warm starts; AVBD its multipliers and stiffnesses, its
+/// joints' as well as its contacts'.
 #[test]
 fn contact_resumes_to_the_bit() {
+    cut_in_three("scenes/hinged_chain.lagra", 600, [201, 402]);
     cut_in_three("scenes/block_stack.lagra", 300, [101, 202]);
     let dir = tempfile::tempdir().unwrap();
     let avbd = dir.path().join("block_stack_avbd.lagra");

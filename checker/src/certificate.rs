@@ -233,6 +233,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         };
         let x = |d: f64| [[0.0, 0.0, 0.0], [1.1 + d, 0.1, 0.0], [0.3, 1.2, -0.1], [1.4, 1.1, 0.9], [-0.8, 0.6, 1.3]];
         let mark = |kind: ClaimKind, v: &[[f64; 3]]| {

@@ -27,10 +27,13 @@ pub enum ClaimKind {
     Resting,
     /// No two solids overlap, and nothing is below the floor, by more than `tol` (a length).
     NoPenetration,
+    /// Every joint holds: each of its pins' two points are at most `tol` (a length) apart (at
+    /// every checkpoint, step 0 included).
+    JointSatisfied,
 }
 
 impl ClaimKind {
-    pub const ALL: [ClaimKind; 8] = [
+    pub const ALL: [ClaimKind; 9] = [
         ClaimKind::EnergyConservation,
         ClaimKind::MomentumConservation,
         ClaimKind::AngularMomentumConservation,
@@ -39,6 +42,7 @@ impl ClaimKind {
         ClaimKind::ConstraintSatisfied,
         ClaimKind::Resting,
         ClaimKind::NoPenetration,
+        ClaimKind::JointSatisfied,
     ];
 
     pub fn name(self) -> &'static str {
@@ -51,6 +55,7 @@ impl ClaimKind {
             ClaimKind::ConstraintSatisfied => "constraint_satisfied",
             ClaimKind::Resting => "resting",
             ClaimKind::NoPenetration => "no_penetration",
+            ClaimKind::JointSatisfied => "joint_satisfied",
         }
     }
 
@@ -80,7 +85,7 @@ impl ClaimKind {
             ClaimKind::MomentumConservation => Some(Dim([1, 1, -1, 0])),
             ClaimKind::AngularMomentumConservation => Some(Dim([1, 2, -1, 0])),
             ClaimKind::Resting => Some(Dim::VELOCITY),
-            ClaimKind::NoPenetration => Some(Dim::LENGTH),
+            ClaimKind::NoPenetration | ClaimKind::JointSatisfied => Some(Dim::LENGTH),
             ClaimKind::DimensionalConsistency | ClaimKind::Distance => None,
         }
     }
@@ -93,6 +98,7 @@ impl ClaimKind {
                 | ClaimKind::ConstraintSatisfied
                 | ClaimKind::Resting
                 | ClaimKind::NoPenetration
+                | ClaimKind::JointSatisfied
         )
     }
 
@@ -164,6 +170,9 @@ impl Claim {
         let name = self.label();
         if self.kind == ClaimKind::ConstraintSatisfied && model.constraints.is_empty() {
             return Err(format!("{name}: the model has no constraint"));
+        }
+        if self.kind == ClaimKind::JointSatisfied && model.pins.is_empty() {
+            return Err(format!("{name}: the model has no joint"));
         }
         if self.kind.needs_tol() && self.tol.is_none() {
             return Err(format!("{name} needs a tolerance"));

@@ -178,6 +178,22 @@ pub struct Model {
     /// A rigid floor (contacts; no energy).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor: Option<Floor>,
+    /// The joints, as the points they hold together (no energy: a joint does no work).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pins: Vec<Pin>,
+}
+
+/// A point of rigid body b, `on_b` in its frame, held at a point of rigid body a (`on_a` in a's
+/// frame) or, where a is none, at the world point `on_a`. A ball joint is one pin; a hinge two,
+/// on its axis, so that it turns about that axis alone.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pin {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<usize>,
+    pub b: usize,
+    pub on_a: [f64; 3],
+    pub on_b: [f64; 3],
 }
 
 /// A state of the system as the kernel produced it, exactly.
@@ -260,6 +276,21 @@ impl Model {
             }
             if !(c.length.is_finite() && c.length > 0.0) {
                 return Err(format!("constraint {n}: length must be finite and positive, got {}", c.length));
+            }
+        }
+        if !self.pins.is_empty() && self.cell.as_ref().is_some_and(|c| c.periodic.iter().any(|&p| p)) {
+            return Err("joints in a periodic box are not supported (a pin's gap would need the nearest image)".into());
+        }
+        for (n, p) in self.pins.iter().enumerate() {
+            let rigid = |i: usize| self.bodies.get(i).is_some_and(|b| b.moments.is_some());
+            if !rigid(p.b) || p.a.is_some_and(|a| a == p.b || !rigid(a)) {
+                return Err(format!(
+                    "joint pin {n}: joins two different rigid bodies (or one and the world), got {:?} and {}",
+                    p.a, p.b
+                ));
+            }
+            if !p.on_a.iter().chain(&p.on_b).all(|c| c.is_finite()) {
+                return Err(format!("joint pin {n}: its points must be finite, got {:?} and {:?}", p.on_a, p.on_b));
             }
         }
         if let Some(f) =

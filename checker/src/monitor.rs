@@ -135,6 +135,7 @@ fn measure<E: Enclosure + PairSum>(c: &Claim, q: &Lifted<E>, model: &Model, s: &
             .collect(),
         ClaimKind::Resting => vec![q.fastest_point(model)],
         ClaimKind::NoPenetration => vec![q.penetration(model, s.x)],
+        ClaimKind::JointSatisfied => q.pin_gaps(model),
         ClaimKind::DimensionalConsistency => vec![],
     }
 }
@@ -142,7 +143,7 @@ fn measure<E: Enclosure + PairSum>(c: &Claim, q: &Lifted<E>, model: &Model, s: &
 /// How far the claimed quantity is from where it must be: |H + Q − H₀|/|H₀| for energy, the
 /// largest claimed component of |X − X₀| for the momenta, max(min − d, d − max) for a distance
 /// (at most 0 inside its bounds), the largest relative error of a constraint, the fastest point
-/// (resting), the deepest overlap (no penetration).
+/// (resting), the deepest overlap (no penetration), the widest gap of a joint's pins.
 fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated: E) -> E {
     match (c.kind, &c.between) {
         (ClaimKind::EnergyConservation, _) => {
@@ -153,7 +154,9 @@ fn deviation<E: Enclosure>(c: &Claim, now: Vec<E>, reference: Vec<E>, dissipated
             let d = now[0].clone();
             (d.lift(b.min) - d.clone()).max(d.clone() - d.lift(b.max))
         }
-        (ClaimKind::ConstraintSatisfied, _) => now.into_iter().reduce(|m, d| m.max(d)).expect("a constraint"),
+        (ClaimKind::ConstraintSatisfied | ClaimKind::JointSatisfied, _) => {
+            now.into_iter().reduce(|m, d| m.max(d)).expect("a constraint or a pin")
+        }
         (ClaimKind::Resting | ClaimKind::NoPenetration, _) => now[0].clone(),
         _ => now.into_iter().zip(reference).map(|(a, b)| (a - b).abs()).reduce(|m, d| m.max(d)).expect("a component"),
     }
@@ -477,6 +480,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         }
     }
 
@@ -577,6 +581,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         };
         (model, [[0.0, -1e5, 0.0]], [[1414.2128, 0.0, 0.0]])
     }

@@ -252,7 +252,7 @@ impl<R: Real> Spin<R> {
     }
 
     /// A body-frame vector p seen in the world.
-    fn turn(&self, p: &Vec3<R>) -> Vec3<R> {
+    pub(crate) fn turn(&self, p: &Vec3<R>) -> Vec3<R> {
         let (w, u) = (self.q[0].clone(), [self.q[1].clone(), self.q[2].clone(), self.q[3].clone()]);
         let uu = norm2(&u);
         let (two, along) = (w.lift(2.0), dot3(&u, p));
@@ -295,6 +295,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         }
     }
 
@@ -315,6 +316,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         }
     }
 

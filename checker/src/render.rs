@@ -55,6 +55,7 @@ fn measure(kind: ClaimKind, balance: bool, extended: bool) -> &'static str {
         ClaimKind::ConstraintSatisfied => "|d−ℓ|/ℓ",
         ClaimKind::Resting => " point speed",
         ClaimKind::NoPenetration => " depth",
+        ClaimKind::JointSatisfied => " gap",
         ClaimKind::DimensionalConsistency => "",
     }
 }

@@ -146,19 +146,19 @@ fn near_solids(model: &Model, x: &[[f64; 3]]) -> Vec<(usize, usize)> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::enclosure::Enclosure;
     use crate::model::{Body, Extent, Floor, Model, Snapshot, Solid, UnitSystem};
     use crate::outward::Outward;
     use crate::quantities::Lifted;
     use proptest::prelude::*;
 
-    fn solid(extent: Extent) -> Body {
+    pub(crate) fn solid(extent: Extent) -> Body {
         let moments = Some([1.0; 3]);
         Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments, solid: Some(Solid { extent, friction: 0.5 }) }
     }
 
-    fn model(bodies: Vec<Body>, floor: Option<f64>) -> Model {
+    pub(crate) fn model(bodies: Vec<Body>, floor: Option<f64>) -> Model {
         let floor = floor.map(|y| Floor { y, friction: None });
         Model {
             units: UnitSystem::Reduced,
@@ -168,6 +168,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor,
+            pins: vec![],
         }
     }
 

@@ -100,6 +100,7 @@ fn model() -> Model {
         constraints: vec![],
         thermostat: None,
         floor: None,
+        pins: vec![],
     }
 }
 

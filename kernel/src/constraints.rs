@@ -303,6 +303,7 @@ mod tests {
             constraints: (1..n).map(|i| Constraint { bodies: [i - 1, i], length: 1.0 }).collect(),
             thermostat: None,
             floor: None,
+            pins: vec![],
         }
     }
 

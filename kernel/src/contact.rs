@@ -13,7 +13,7 @@
 //! None of this is trusted: `no_penetration` is certified by the checker's own geometry.
 
 use crate::rigid::Spin;
-use lagra_checker::model::{Extent, Floor, Model};
+use lagra_checker::model::{Extent, Floor, Model, Pin};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 type V = Vector3<f64>;
@@ -49,6 +49,8 @@ pub struct Solids {
     /// Per body: its solid, none for a point mass.
     solids: Vec<Option<Solid>>,
     floor: Option<Floor>,
+    /// The joints' pins (AVBD holds them); two bodies a pin joins never touch.
+    pub pins: Vec<Pin>,
     /// How far apart two surfaces may be and still make a (speculative) contact.
     pub margin: f64,
 }
@@ -56,20 +58,21 @@ pub struct Solids {
 impl Solids {
     /// Nothing to touch, for `n` bodies (a contact solver named where nothing can meet).
     pub fn none(n: usize) -> Solids {
-        Solids { solids: vec![None; n], floor: None, margin: 0.0 }
+        Solids { solids: vec![None; n], floor: None, pins: vec![], margin: 0.0 }
     }
 
-    /// None when nothing can touch: no floor and fewer than two solids.
+    /// None when nothing can touch and nothing is pinned: no floor, no joint and fewer than two
+    /// solids.
     pub fn of(model: &Model) -> Option<Solids> {
         let solids: Vec<Option<Solid>> =
             model.bodies.iter().map(|b| b.solid.map(|s| Solid { extent: s.extent, friction: s.friction })).collect();
         let count = solids.iter().flatten().count();
-        if model.floor.is_none() && count < 2 {
+        if model.floor.is_none() && model.pins.is_empty() && count < 2 {
             return None;
         }
         let smallest = solids.iter().flatten().map(|s| least(&s.extent)).fold(f64::INFINITY, f64::min);
         let margin = if smallest.is_finite() { 0.02 * smallest } else { 1e-3 };
-        Some(Solids { solids, floor: model.floor, margin })
+        Some(Solids { solids, floor: model.floor, pins: model.pins.clone(), margin })
     }
 
     /// The poses of the bodies at positions `x` and spins `spin` (rigid bodies in order).
@@ -129,8 +132,10 @@ impl Solids {
                     break;
                 }
                 let d = poses[j].centre - poses[i].centre;
-                if d.iter().all(|c| c.abs() <= ri + rj) && d.norm() <= ri + rj {
-                    pairs.push((i.min(j), i.max(j)));
+                let (a, b) = (i.min(j), i.max(j));
+                let pinned = self.pins.iter().any(|p| p.a == Some(a) && p.b == b || p.a == Some(b) && p.b == a);
+                if d.iter().all(|c| c.abs() <= ri + rj) && d.norm() <= ri + rj && !pinned {
+                    pairs.push((a, b));
                 }
             }
         }

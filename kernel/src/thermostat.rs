@@ -66,6 +66,7 @@ mod tests {
             constraints: vec![],
             thermostat: Some(chain(0.8, 0.5, 3, 3.0 * n as f64 - 3.0)),
             floor: None,
+            pins: vec![],
         };
         let v = (0..n as u64)
             .map(|i| std::array::from_fn(|c| lagra_lang::random::normal(1, 0, 3 * i + c as u64)))

@@ -15,6 +15,7 @@ use std::collections::HashMap;
 
 mod bodies;
 mod claims;
+mod joints;
 mod solver;
 
 use bodies::{BUILTIN_TYPES, ENTITY_FIELDS};
@@ -45,6 +46,8 @@ struct Compiler<'a> {
     thermostat: Option<(f64, Thermostat, Option<usize>, Span)>,
     /// Each `constraint [i, j] { length }`: its bodies, its length if given, where it stands.
     constraints: Vec<([usize; 2], Option<f64>, Span)>,
+    /// Each `joint`, as written.
+    joints: Vec<joints::JointDecl>,
     cell: Option<(Cell, Span)>,
     /// Where each term was written, for errors found once the whole scene is known, and its line.
     term_at: Vec<Span>,
@@ -94,6 +97,7 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
         solver: None,
         thermostat: None,
         constraints: vec![],
+        joints: vec![],
         cell: None,
         floor: None,
         solid_at: vec![],
@@ -164,6 +168,10 @@ impl<'a> Compiler<'a> {
                 self.constraints.push(([indices[0].0, indices[1].0], length, span));
                 self.indices.push(indices);
                 Ok(())
+            }
+            Rule::joint => {
+                let (_, kind, idx) = (next(), next().expect("joint kind"), next().expect("indices"));
+                self.joint(&kind, &idx, next(), span)
             }
             Rule::interaction | Rule::external => {
                 let kw = if rule == Rule::interaction { next().and(next()) } else { next() }.expect("keyword");
@@ -310,6 +318,7 @@ impl<'a> Compiler<'a> {
                 return err(*s, "constraint_satisfied: the scene declares no constraint");
             }
         }
+        let pins = self.pins()?;
         let mut model = Model {
             units: self.rd.system,
             cell,
@@ -318,9 +327,10 @@ impl<'a> Compiler<'a> {
             constraints,
             thermostat: None,
             floor: self.floor.map(|f| f.0),
+            pins,
         };
         for (c, s) in self.claims.iter().zip(&self.claim_spans) {
-            if matches!(c.kind, ClaimKind::Resting | ClaimKind::NoPenetration) {
+            if matches!(c.kind, ClaimKind::Resting | ClaimKind::NoPenetration | ClaimKind::JointSatisfied) {
                 c.validate(&model).map_err(|e| Diagnostic::new(*s, e))?;
             }
             if c.after.is_some_and(|t| t > solver.steps as f64 * solver.dt) {
@@ -405,16 +415,20 @@ fn reach_within(c: &Cell, terms: &[TermInstance], at: &[Span]) -> Result<(), Dia
     Ok(())
 }
 
-/// The body indices of a bond or constraint: `arity` of them, each once.
-fn listed(idx: &Pair, owner: &str, arity: usize) -> Result<Vec<(usize, Span)>, Diagnostic> {
-    let indices: Vec<(usize, Span)> = idx
-        .clone()
+/// The body indices written `[i, j, ...]`, each where it stands.
+fn indices_of(idx: &Pair) -> Result<Vec<(usize, Span)>, Diagnostic> {
+    idx.clone()
         .into_inner()
         .map(|i| match i.as_str().parse::<usize>() {
             Ok(n) => Ok((n, i.as_span().into())),
             Err(_) => err(i.as_span(), format!("body index `{}` is too large", i.as_str())),
         })
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+/// The body indices of a bond or constraint: `arity` of them, each once.
+fn listed(idx: &Pair, owner: &str, arity: usize) -> Result<Vec<(usize, Span)>, Diagnostic> {
+    let indices = indices_of(idx)?;
     if indices.len() != arity {
         return err(idx.as_span(), format!("{owner} joins {arity} bodies, got {}", indices.len()));
     }

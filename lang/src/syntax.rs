@@ -25,6 +25,7 @@ fn describe(r: &Rule) -> &'static str {
         Rule::template | Rule::entity | Rule::kw_entity => "`entity`",
         Rule::bond | Rule::kw_bond => "`bond`",
         Rule::constraint | Rule::kw_constraint => "`constraint`",
+        Rule::joint | Rule::kw_joint => "`joint`",
         Rule::interaction | Rule::kw_interaction => "`interaction`",
         Rule::thermostat | Rule::kw_thermostat => "`thermostat`",
         Rule::external => "a term",

@@ -35,7 +35,7 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
-    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `interaction`, `thermostat`, `solver`, `box`, `lattice` or a name, found end of file"));
+    assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `joint`, `interaction`, `thermostat`, `solver`, `box`, `lattice` or a name, found end of file"));
 }
 
 #[test]
@@ -48,7 +48,7 @@ fn unknown_keyword() {
         error("bond harmonic", "bond spring"),
         at(4, 8, "unknown bond `spring`; known: harmonic, morse, fene, angle, dihedral, hbond")
     );
-    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance, constraint_satisfied, resting, no_penetration, noether"));
+    assert_eq!(error("  solver", "  @expect energy { tol: 1 }\n  solver"), at(5, 11, "unknown claim `energy`; known claims: energy_conservation, momentum_conservation, angular_momentum_conservation, dimensional_consistency, distance, constraint_satisfied, resting, no_penetration, joint_satisfied, noether"));
 }
 
 #[test]
@@ -586,4 +586,71 @@ fn a_lattice_of_rigid_bodies_is_refused() {
         (d.line_col(src), d.message.as_str()),
         ((2, 27), "a lattice's bodies are point masses: its entity type cannot have a shape")
     );
+}
+
+/// Two bricks hinged end to end, the first hinged to the world.
+const HINGED: &str = "scene s {
+  entity { shape: box, size: [1, 0.2, 0.2], mass: 1, position: [0.5, 0, 0] }
+  entity { shape: box, size: [1, 0.2, 0.2], mass: 1, position: [1.5, 0, 0] }
+  entity { mass: 1, position: [5, 0, 0] }
+  joint hinge [0] { at: [0, 0, 0], axis: [0, 0, 1] }
+  joint ball [0, 1] { at: [1, 0, 0] }
+  @expect joint_satisfied { tol: 1e-3 }
+  solver { integrator: \"avbd\", dt: 0.001, steps: 10 }
+}";
+
+#[test]
+fn joints_become_pins_in_the_bodies_frames() {
+    let s = compile(HINGED).unwrap();
+    let pins = &s.model.pins;
+    assert_eq!(pins.len(), 3, "a hinge is two pins, a ball joint one");
+    assert_eq!((pins[0].a, pins[0].b, pins[0].on_a, pins[0].on_b), (None, 0, [0.0; 3], [-0.5, 0.0, 0.0]));
+    // the hinge's second pin: one reach of the brick (√(0.5² + 0.1² + 0.1²)) along z
+    let reach = (0.27f64).sqrt();
+    assert_eq!(pins[1].on_b, [-0.5, 0.0, reach]);
+    assert_eq!((pins[2].a, pins[2].b, pins[2].on_a, pins[2].on_b), (Some(0), 1, [0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]));
+    // without a solver block naming one, a jointed scene gets avbd
+    let plain = HINGED.replace("integrator: \"avbd\", ", "");
+    assert_eq!(compile(&plain).unwrap().solver.integrator, crate::integrator::Integrator::Avbd);
+}
+
+#[test]
+fn bad_joints_are_refused_where_they_are_written() {
+    let e = |from: &str, to: &str| {
+        let src = HINGED.replace(from, to);
+        assert_ne!(src, HINGED, "{from}");
+        let d = compile(&src).unwrap_err();
+        let (l, c) = d.line_col(&src);
+        at(l, c, &d.message)
+    };
+    assert_eq!(
+        e("ball [0, 1]", "ball [0, 2]"),
+        at(6, 18, "joint: body 2 is a point mass; a joint joins solids (entities with a `shape`)")
+    );
+    assert_eq!(e("ball [0, 1]", "ball [1, 1]"), at(6, 14, "joint ball joins body 1 to itself"));
+    assert_eq!(e("ball [0, 1]", "ball [0, 9]"), at(6, 18, "joint: body 9 does not exist (3 bodies)"));
+    assert_eq!(
+        e("ball [0, 1]", "ball [0, 1, 2]"),
+        at(6, 14, "joint ball joins two solids `[i, j]`, or one and the world `[i]`; got 3 indices")
+    );
+    assert_eq!(e("axis: [0, 0, 1]", "axis: [0, 0, 0]"), at(5, 42, "a hinge's axis must not be zero"));
+    assert_eq!(e(", axis: [0, 0, 1]", ""), at(5, 3, "joint hinge needs `axis`, the direction it turns about"));
+    assert_eq!(
+        e("at: [1, 0, 0] }", "at: [1, 0, 0], axis: [1, 0, 0] }"),
+        at(6, 38, "`axis` belongs to a hinge; a ball joint turns every way")
+    );
+    assert_eq!(e("joint ball", "joint slider"), at(6, 9, "unknown joint `slider`; known joints: ball, hinge"));
+    assert_eq!(
+        e("at: [1, 0, 0]", "at: [3, 0, 0]"),
+        at(6, 27, "joint: its point is 2.5000 from body 0's centre, beyond the body's reach 0.5196: the bodies must start joined at `at`")
+    );
+    assert_eq!(
+        e("integrator: \"avbd\", ", "integrator: \"sequential_impulses\", "),
+        at(5, 3, "joints are held by `avbd` alone; the solver's sequential_impulses cannot keep them: set `integrator: \"avbd\"`")
+    );
+    assert_eq!(e("at: [0, 0, 0], ", ""), at(5, 3, "joint hinge needs `at`, the joint's point (a length vector)"));
+    let unjointed = HINGED
+        .replace("  joint hinge [0] { at: [0, 0, 0], axis: [0, 0, 1] }\n  joint ball [0, 1] { at: [1, 0, 0] }\n", "");
+    let d = compile(&unjointed).unwrap_err();
+    assert_eq!((d.line_col(&unjointed), d.message.as_str()), ((5, 11), "joint_satisfied: the model has no joint"));
 }

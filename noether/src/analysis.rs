@@ -103,7 +103,10 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
 /// What the contacts, which are no terms, break: a rigid floor (normal y) every symmetry that
 /// moves its plane, and with friction the others along it, since it pushes against the bodies'
 /// sliding; and any contact the energy, since it is inelastic. Contacts between solids
-/// alone push equally and oppositely at one point, so they keep both momenta.
+/// alone push equally and oppositely at one point, so they keep both momenta, and so do joints
+/// between solids; a joint to the world holds its points in place, breaking every translation
+/// and boost, and every rotation about an axis (through the origin) that does not pass through
+/// all of them.
 fn contacts_break(model: &Model, s: Symmetry) -> Vec<String> {
     use Symmetry::*;
     let solids: Vec<f64> = model.bodies.iter().filter_map(|b| b.solid.map(|s| s.friction)).collect();
@@ -115,6 +118,18 @@ fn contacts_break(model: &Model, s: Symmetry) -> Vec<String> {
         } else if gripped && matches!(s, TranslationX | TranslationZ | RotationY | BoostX | BoostZ) {
             by.push("the rigid floor's friction".to_string());
         }
+    }
+    let anchored: Vec<[f64; 3]> = model.pins.iter().filter(|p| p.a.is_none()).map(|p| p.on_a).collect();
+    let on_axis = |k: usize| anchored.iter().all(|p| (0..3).all(|c| c == k || p[c] == 0.0));
+    let held = match s {
+        RotationX => on_axis(0),
+        RotationY => on_axis(1),
+        RotationZ => on_axis(2),
+        Time => true,
+        _ => anchored.is_empty(),
+    };
+    if !held {
+        by.push("the joints to the world".to_string());
     }
     if s == Time && (model.floor.is_some() || solids.len() >= 2) {
         by.push("the contacts (inelastic)".to_string());
@@ -213,7 +228,16 @@ mod tests {
 
     fn model(terms: Vec<TermInstance>, cell: Option<Cell>) -> Model {
         let bodies = vec![Body { mass: 1.0, charge: 1.0, colour: [0.0; 2], moments: None, solid: None }; 3];
-        Model { units: UnitSystem::Reduced, cell, bodies, terms, constraints: vec![], thermostat: None, floor: None }
+        Model {
+            units: UnitSystem::Reduced,
+            cell,
+            bodies,
+            terms,
+            constraints: vec![],
+            thermostat: None,
+            floor: None,
+            pins: vec![],
+        }
     }
 
     fn term(kind: Kind, params: &[f64]) -> TermInstance {
@@ -269,6 +293,21 @@ mod tests {
                 && broken_by(&slippery, Symmetry::RotationY).is_empty()
         );
         assert_eq!(broken_by(&slippery, Symmetry::RotationX), ["the rigid floor"]);
+        // a ball joint to the world on the y axis keeps only the turn about y (and the energy);
+        // a joint between the two solids keeps everything the free pair keeps
+        use lagra_checker::model::Pin;
+        let pin = |a, on_a| Pin { a, b: 1, on_a, on_b: [0.0, 0.5, 0.0] };
+        let hung = Model { pins: vec![pin(None, [0.0, 3.0, 0.0])], ..solids(0.5, None) };
+        let a = analyse(&hung, Table::derived());
+        let world = ["the joints to the world"];
+        assert_eq!(broken_by(&a, Symmetry::TranslationX), world);
+        assert_eq!(broken_by(&a, Symmetry::BoostZ), world);
+        assert_eq!(broken_by(&a, Symmetry::RotationX), world);
+        assert!(broken_by(&a, Symmetry::RotationY).is_empty());
+        let off_axis = Model { pins: vec![pin(None, [1.0, 3.0, 0.0])], ..solids(0.5, None) };
+        assert_eq!(broken_by(&analyse(&off_axis, Table::derived()), Symmetry::RotationY), world);
+        let linked = analyse(&Model { pins: vec![pin(Some(0), [0.0; 3])], ..solids(0.5, None) }, Table::derived());
+        assert!(Symmetry::ALL.iter().filter(|&&s| s != Symmetry::Time).all(|&s| broken_by(&linked, s).is_empty()));
     }
 
     #[test]

@@ -207,6 +207,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         };
         let jitter = |k: usize| ((k * 7919 % 1000) as f64 / 1000.0 - 0.5) * 0.2;
         let x = (0..2197).map(|k| [k % 13, k / 13 % 13, k / 169].map(|c| c as f64 * 1.1 + jitter(k + c))).collect();

@@ -448,6 +448,7 @@ mod tests {
                 constraints: vec![],
                 thermostat: None,
                 floor: None,
+                pins: vec![],
             },
             x,
             v,

@@ -131,6 +131,7 @@ pub fn assert_matches_definition(kind: Kind, params: &[f64], seed: u64, sep: f64
         constraints: vec![],
         thermostat: None,
         floor: None,
+        pins: vec![],
     };
 
     let mut fast = vec![[0.0; 3]; n];

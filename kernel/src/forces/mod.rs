@@ -357,6 +357,7 @@ mod tests {
                 constraints: vec![],
                 thermostat: None,
                 floor: None,
+                pins: vec![],
             },
             n,
         )

@@ -87,6 +87,7 @@ mod tests {
             constraints: vec![],
             thermostat: None,
             floor: None,
+            pins: vec![],
         };
         let s = State {
             step: 0,

@@ -32,7 +32,7 @@ impl<'a> Compiler<'a> {
         if kind.needs_tol() && claim.tol.is_none() {
             let example = match kind {
                 ClaimKind::Resting => "`{ max_speed: 0.01, after: 2 }` (a speed, a time)",
-                ClaimKind::NoPenetration => "`{ tol: 0.001 }` (a length)",
+                ClaimKind::NoPenetration | ClaimKind::JointSatisfied => "`{ tol: 0.001 }` (a length)",
                 _ => "`{ tol: 1e-5 }` (relative)",
             };
             return err(at, format!("{owner} needs a tolerance: {example}"));
@@ -55,7 +55,10 @@ impl<'a> Compiler<'a> {
             ClaimKind::DimensionalConsistency => vec![],
             ClaimKind::Distance => vec!["between", "min", "max", "every"],
             ClaimKind::MomentumConservation | ClaimKind::AngularMomentumConservation => vec!["tol", "every", "axes"],
-            ClaimKind::EnergyConservation | ClaimKind::ConstraintSatisfied | ClaimKind::NoPenetration => {
+            ClaimKind::EnergyConservation
+            | ClaimKind::ConstraintSatisfied
+            | ClaimKind::NoPenetration
+            | ClaimKind::JointSatisfied => {
                 vec!["tol", "every"]
             }
             ClaimKind::Resting => vec!["every"],

@@ -149,7 +149,18 @@ impl<'a> Compiler<'a> {
     pub(super) fn settle(&self, b: SolverBlock) -> Result<Solver, Diagnostic> {
         let constrained = !self.constraints.is_empty();
         let touching = self.floor.is_some() || self.bodies.iter().filter(|b| b.solid.is_some()).count() >= 2;
-        let (integrator, at) = b.integrator.unwrap_or((Integrator::default_for(constrained, touching), b.at));
+        let jointed = self.joints.first().map(|j| j.span);
+        let default = if jointed.is_some() { Integrator::Avbd } else { Integrator::default_for(constrained, touching) };
+        let (integrator, at) = b.integrator.unwrap_or((default, b.at));
+        if let (Some(joint), true) = (jointed, integrator != Integrator::Avbd) {
+            return err(
+                joint,
+                format!(
+                    "joints are held by `avbd` alone; the solver's {} cannot keep them: set `integrator: \"avbd\"`",
+                    integrator.name()
+                ),
+            );
+        }
         let mut settings: Settings = integrator.defaults();
         for (name, value, span) in b.settings {
             if !integrator.settings().contains(&name) {
