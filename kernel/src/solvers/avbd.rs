@@ -25,8 +25,13 @@
 //! Velocities are the move over dt (v = Δx/dt, ω = Δθ/dt in the world, π = I Rᵀω), so the
 //! method dissipates as implicit Euler does, which is what lets a stack settle.
 //!
+//! A joint is pins (`lagra_checker::model::Pin`), each three equality rows along x, y, z of
+//! the gap between a point of b and one of a (or of the world), linear in the moves like a
+//! contact's, unclamped, warm-started as a contact's are, with a share 1 − α_pin of the step's
+//! starting gap closed in the step.
+//!
 //! Nothing here is trusted: `resting` and `no_penetration` are decided by the checker's own
-//! geometry on the states this produces.
+//! geometry on the states this produces, and `joint_satisfied` by the pins' gaps.
 
 use super::{Carried, Evaluated, Failure, Iterations, Solver};
 use crate::contact::{Pose, Solids, Touch};
@@ -46,7 +51,7 @@ const STABILISE: f64 = 0.95;
 /// α_pin: the share of a joint's starting gap left for later steps. A gap closed in one step
 /// becomes a velocity (v = Δx/dt): closing all of it pumped energy into
 /// `scenes/hinged_chain.lagra` (|ΔH|/|H₀| 0.2 within 0.12 s); at 40 sweeps 0.8 left the energy
-/// within 8.2e-4 over 2 s and the widest gap at 2.2e-4, 0.95 at 5.9e-4 and 8.1e-4.
+/// within 6.2e-4 over 2 s and the widest gap at 2.2e-4, 0.95 at 5.9e-4 and 8.1e-4.
 const PIN_STABILISE: f64 = 0.8;
 /// γ: how much of last step's λ and k a persisting contact starts from. The authors use 0.99;
 /// on `scenes/bench/stack_1000.lagra` 0.9 left its fastest point at 4.5e-3 / 4.7e-3 (dt 0.005
@@ -186,6 +191,12 @@ impl Contact {
         }
     }
 
+    /// Starts from last step's λ and k: λ decayed by αγ, k by γ (within its start and cap).
+    fn warm_from(&mut self, lambda: &[f64; 3], stiffness: &[f64; 3]) {
+        self.lambda = lambda.map(|l| l * STABILISE * DECAY);
+        self.stiffness = stiffness.map(|k| (k * DECAY).clamp(self.start, self.most));
+    }
+
     /// The three rows' errors at these moves.
     fn errors(&self, bodies: &[Body]) -> [f64; 3] {
         let on_a = |k: usize| self.a.map_or(0.0, |a| self.jacobians[0][k].dot(&bodies[a].moved));
@@ -254,8 +265,7 @@ impl Solver for Avbd {
         for (j, p) in self.solids.pins.iter().enumerate() {
             let mut c = Contact::pin(j, p, &start, &bodies, margin);
             if let Some((_, lambda, stiffness)) = self.warm.get(&pin_key(j)).and_then(|w| w.first()) {
-                c.lambda = *lambda;
-                c.stiffness = stiffness.map(|k| (k * DECAY).clamp(c.start, c.most));
+                c.warm_from(lambda, stiffness);
             }
             contacts.push(c);
         }
@@ -360,8 +370,7 @@ impl Avbd {
         let Some(old) = self.warm.get(&(c.a.unwrap_or(usize::MAX), c.b)) else { return };
         let near = old.iter().map(|w| ((w.0 - c.point).norm_squared(), w)).min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((_, (_, lambda, stiffness))) = near.filter(|n| n.0 <= reach) {
-            c.lambda = lambda.map(|l| l * STABILISE * DECAY);
-            c.stiffness = stiffness.map(|k| (k * DECAY).clamp(c.start, c.most));
+            c.warm_from(lambda, stiffness);
         }
     }
 
