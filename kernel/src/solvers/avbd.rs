@@ -156,8 +156,8 @@ impl Contact {
     fn pin(j: usize, p: &Pin, start: &[Pose], bodies: &[Body], margin: f64) -> Contact {
         let seen = |i: usize, on: &[f64; 3]| start[i].rotation * V::from(*on);
         let (arm_b, arm_a) = (seen(p.b, &p.on_b), p.a.map(|a| seen(a, &p.on_a)));
-        let (at_b, at_a) =
-            (start[p.b].centre + arm_b, p.a.map_or(V::from(p.on_a), |a| start[a].centre + arm_a.unwrap()));
+        let at_b = start[p.b].centre + arm_b;
+        let at_a = p.a.zip(arm_a).map_or(V::from(p.on_a), |(a, arm)| start[a].centre + arm);
         let row = |arm: V, sign: f64| {
             [V::x(), V::y(), V::z()].map(|d| {
                 let turn = arm.cross(&d);
