@@ -85,6 +85,16 @@ fn witnesses(model: &Model, s: &State) -> Witnesses {
             Shape::Bond(_) => energy.push(v(&t.sites.iter().map(|&j| seen(t.sites[0], j)).collect::<Vec<_>>())),
             Shape::External if t.sites.is_empty() => energy.extend((0..s.x.len()).map(|i| v(&[site(i)]))),
             Shape::External => energy.extend(t.sites.iter().map(|&i| v(&[site(i)]))),
+            Shape::Density => {
+                // each body's internal energy at the density its pairs within reach give it
+                let share = |a: &Site<f64>, b: &Site<f64>| t.kind.density(&t.params, a, b).unwrap_or(0.0);
+                let mut rho: Vec<f64> = (0..s.x.len()).map(|i| share(&site(i), &site(i))).collect();
+                for p in broad_phase::within(&s.x, &model.cell, Some(t.kind.reach(&t.params))) {
+                    rho[p.i] += share(&site(p.i), &seen(p.i, p.j));
+                    rho[p.j] += share(&seen(p.i, p.j), &site(p.i));
+                }
+                energy.extend(rho.iter().enumerate().filter_map(|(i, &r)| t.kind.internal(&t.params, &site(i), r)));
+            }
         }
     }
     let momentum: Vec<f64> = (0..s.x.len()).map(|i| model.bodies[i].mass * s.v[i][0]).collect();

@@ -16,6 +16,9 @@ pub fn table() -> String {
             ),
             Shape::Pairwise => (format!("`interaction {}`", spec.keyword), "every pair".to_string()),
             Shape::External => (format!("`{}`", spec.keyword), "every body, or those `on: [..]`".to_string()),
+            Shape::Density => {
+                (format!("`{}`", spec.keyword), "every body, through the density of its neighbours".to_string())
+            }
         };
         let params: Vec<String> = spec
             .params

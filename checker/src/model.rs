@@ -256,9 +256,19 @@ impl Model {
             if let Some(p) = t.params.iter().find(|p| !p.is_finite()) {
                 return Err(format!("term {n} ({name}): non-finite parameter {p}"));
             }
+            let mut at = 0;
+            for p in spec.params {
+                if p.positive && t.params[at..at + p.len].iter().any(|&c| c <= 0.0) {
+                    return Err(format!("term {n} ({name}): {} must be positive", p.name));
+                }
+                at += p.len;
+            }
+            if let Err((p, why)) = t.kind.accepts(&t.params) {
+                return Err(format!("term {n} ({name}): {p} {why}"));
+            }
             let sites_ok = match spec.shape {
                 Shape::Bond(arity) => t.sites.len() == arity,
-                Shape::Pairwise => t.sites.is_empty(),
+                Shape::Pairwise | Shape::Density => t.sites.is_empty(),
                 // every body, or only those listed
                 Shape::External => true,
             };

@@ -34,6 +34,8 @@ impl Dim {
     pub const ELECTRIC: Dim = Dim([1, 1, -2, -1]);
     /// Magnetic field: force / (charge × velocity); tesla = kg/(s·C).
     pub const MAGNETIC: Dim = Dim([1, 0, -1, -1]);
+    /// Mass density, kg/m³.
+    pub const DENSITY: Dim = Dim([1, -3, 0, 0]);
 
     pub fn pow(self, n: i8) -> Dim {
         Dim(self.0.map(|e| e * n))
@@ -41,7 +43,8 @@ impl Dim {
 
     /// A name for the common dimensions, used in error messages.
     pub fn describe(self) -> Option<&'static str> {
-        const NAMES: [(Dim, &str); 17] = [
+        const NAMES: [(Dim, &str); 18] = [
+            (Dim::DENSITY, "mass/length³"),
             (Dim::MAGNETIC, "magnetic field"),
             (Dim::INVERSE_LENGTH, "1/length"),
             (Dim::ENERGY_LENGTH, "energy·length"),

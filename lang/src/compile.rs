@@ -180,7 +180,9 @@ impl<'a> Compiler<'a> {
                 } else {
                     ("term", Shape::External)
                 };
-                let kind = lookup(&kw, |s| s == shape, what)?;
+                // a fluid is written like an external term: its density's pairs are its own
+                let kind = lookup(&kw, |s| s == shape || (shape == Shape::External && s == Shape::Density), what)?;
+                let shape = kind.spec().shape;
                 let mut block = Block::read(next(), kw.as_span().into())?;
                 if kind == Kind::ContactFloor && block.get("k").is_none() {
                     return self.rigid_floor(block, kw.as_span().into());
@@ -189,10 +191,11 @@ impl<'a> Compiler<'a> {
                 let on = match block.take("on") {
                     Some(f) if shape == Shape::External => self.rd.body_list(&f, kind.name())?,
                     Some(f) => {
+                        let every = if shape == Shape::Density { "body of the fluid" } else { "pair" };
                         return err(
                             f.span,
-                            format!("{} acts on every pair; `on` belongs to external terms", kind.name()),
-                        )
+                            format!("{} acts on every {every}; `on` belongs to external terms", kind.name()),
+                        );
                     }
                     None => vec![],
                 };
@@ -270,16 +273,26 @@ impl<'a> Compiler<'a> {
     /// The term's parameters in the order of its spec, each checked against its dimension.
     fn params(&self, kind: Kind, mut b: Block, at: Span) -> Result<Vec<f64>, Diagnostic> {
         let spec = kind.spec();
-        let mut out = vec![];
+        let (mut out, mut written) = (vec![], vec![]);
         for p in spec.params {
             match (b.take(p.name), p.default) {
-                (Some(f), _) => out.extend(self.rd.numbers(&f, spec.name, p.dim, p.len)?),
+                (Some(f), _) => {
+                    written.push((p.name, value_span(&f)));
+                    match p.positive && p.len == 1 {
+                        true => out.push(self.rd.positive(&f, spec.name, p.dim)?),
+                        false => out.extend(self.rd.numbers(&f, spec.name, p.dim, p.len)?),
+                    }
+                }
                 (None, Some(d)) => out.extend(std::iter::repeat_n(d, p.len)),
                 (None, None) => return err(at, format!("{} needs `{}` ({})", spec.name, p.name, typed(p.dim))),
             }
         }
         let names: Vec<&str> = spec.params.iter().map(|p| p.name).collect();
         b.check_names(spec.name, &names)?;
+        if let Err((name, why)) = kind.accepts(&out) {
+            let span = written.iter().find(|w| w.0 == name).map_or(at, |w| w.1);
+            return err(span, format!("{}.{name} {why}", spec.name));
+        }
         Ok(out)
     }
 
@@ -403,7 +416,8 @@ fn reach_within(c: &Cell, terms: &[TermInstance], at: &[Span]) -> Result<(), Dia
     if half.is_infinite() {
         return Ok(());
     }
-    for (t, s) in terms.iter().zip(at).filter(|(t, _)| t.kind.spec().shape == Shape::Pairwise) {
+    for (t, s) in terms.iter().zip(at).filter(|(t, _)| matches!(t.kind.spec().shape, Shape::Pairwise | Shape::Density))
+    {
         let r = t.kind.reach(&t.params);
         if r.is_infinite() {
             return err(*s, format!("{} has unbounded reach: in a periodic box it would see only the nearest image; use a term with a cutoff", t.kind.name()));

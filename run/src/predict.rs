@@ -4,7 +4,7 @@
 //! (the integrator's error), not certified claims.
 
 use lagra_checker::model::Model;
-use lagra_lang::prediction::{Prediction, PredictionKind};
+use lagra_lang::prediction::{Column, Prediction, PredictionKind, MARTIN_MOYCE};
 use lagra_lang::thermostat::Bath;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -26,10 +26,12 @@ pub enum Meter {
     Virial { masses: Vec<f64>, kinetic: f64, virial: f64, states: u64 },
     /// The first and the last velocities, the masses, and the bath's kT if any.
     Velocities { first: Option<Vec<[f64; 3]>>, last: Vec<[f64; 3]>, masses: Vec<f64>, kt: Option<f64> },
+    /// A dam break's front z/a at each state (T = t√(2g/a), Z), thinned to the times between.
+    Front { column: Column, last: Option<(f64, f64)>, at: Vec<(f64, f64)> },
 }
 
 impl Meter {
-    pub fn new(p: &Prediction, model: &Model, bath: Option<Bath>) -> Meter {
+    pub fn new(p: &Prediction, model: &Model, x0: &[[f64; 3]], bath: Option<Bath>) -> Meter {
         match p.kind {
             PredictionKind::OscillatorPeriod => {
                 let b = &model.terms[0];
@@ -64,6 +66,10 @@ impl Meter {
                     extent: (f64::INFINITY, f64::NEG_INFINITY),
                     radius,
                 }
+            }
+            PredictionKind::DamBreakFront => {
+                let column = Column::of(model, x0).expect("the prediction was accepted at compile time");
+                Meter::Front { column, last: None, at: vec![] }
             }
             PredictionKind::MaxwellBoltzmann => {
                 let masses = model.bodies.iter().map(|b| b.mass).collect();
@@ -106,6 +112,16 @@ impl Meter {
                 }
                 *last = Some((t, s));
             }
+            Meter::Front { column: c, last, at } => {
+                let now = (t * (2.0 * c.g / c.a).sqrt(), c.front(x));
+                // the front between the last state and this one at each of the table's times
+                if let Some((t0, z0)) = *last {
+                    for &(tm, _) in MARTIN_MOYCE.iter().filter(|(tm, _)| t0 < *tm && *tm <= now.0) {
+                        at.push((tm, z0 + (now.1 - z0) * (tm - t0) / (now.0 - t0)));
+                    }
+                }
+                *last = Some(now);
+            }
             Meter::Revolutions(w) => {
                 let r = Vector3::from(x[1]) - Vector3::from(x[0]);
                 let n = r.cross(&(Vector3::from(v[1]) - Vector3::from(v[0])));
@@ -134,6 +150,15 @@ impl Meter {
                     "KS along each axis, {n} velocity components at T = {t:.4}: D ≤ {d:.4}, p = {p:.3} (initially p = {p0:.1e})"
                 )),
             ));
+        }
+        if let Meter::Front { at, .. } = self {
+            // the ratio farthest from 1, and every point
+            let ratios: Vec<(f64, f64, f64)> =
+                at.iter().zip(MARTIN_MOYCE).map(|(&(t, z), (_, zm))| (t, z, zm)).collect();
+            let worst =
+                ratios.iter().map(|(_, z, zm)| z / zm).max_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))?;
+            let points: Vec<String> = ratios.iter().map(|(t, z, zm)| format!("T {t}: z/a {z:.3} (M&M {zm})")).collect();
+            return Some((worst, Some(format!("front against Martin & Moyce 1952: {}", points.join(", ")))));
         }
         self.period().map(|t| (t, None))
     }

@@ -172,7 +172,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let (mut state, mut monitor, mut observer, mut meters, carried) = match opts.resume.take() {
         None => {
             let meters: Vec<(Meter, &Prediction)> =
-                scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, scene.bath()), p)).collect();
+                scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, &scene.x0, scene.bath()), p)).collect();
             let observer = Observer::new(scene, &graph, steps)?;
             (lagra_kernel::setup::start(scene), Monitor::new(model, claims, steps)?, observer, meters, None)
         }

@@ -117,7 +117,7 @@ pub fn asked_reach(t: &TermInstance) -> Option<f64> {
 /// term without one is summed over every pair and needs no list).
 pub fn pair_reaches(model: &Model) -> Vec<f64> {
     let mut reaches: Vec<f64> = vec![];
-    for t in model.terms.iter().filter(|t| t.kind.spec().shape == Shape::Pairwise) {
+    for t in model.terms.iter().filter(|t| matches!(t.kind.spec().shape, Shape::Pairwise | Shape::Density)) {
         if let Some(r) = asked_reach(t).filter(|r| !reaches.contains(r)) {
             reaches.push(r);
         }

@@ -37,36 +37,47 @@ pub enum Shape {
     Pairwise,
     /// Every body on its own, written `KEYWORD { .. }`.
     External,
+    /// Every body through its density, a sum over the bodies within reach (`Definition::density`),
+    /// written `KEYWORD { .. }` like an external term: the energy Σₐ `internal`(a, ρₐ) is not a
+    /// sum over pairs. `potential` is then a body's energy with one neighbour (`fluid_pair`): the
+    /// same formula, for the dimensions, the symmetries and the Lean export.
+    Density,
 }
 
 impl Shape {
     pub fn arity(self) -> usize {
         match self {
             Shape::Bond(n) => n,
-            Shape::Pairwise => 2,
+            Shape::Pairwise | Shape::Density => 2,
             Shape::External => 1,
         }
     }
 }
 
-/// One parameter: its name in the source, its dimension, its length (1 or 3) and default.
+/// One parameter: its name in the source, its dimension, its length (1 or 3), its default and
+/// whether it must be positive (a smoothing length, a density: the compiler refuses others, and
+/// so does a certificate's model).
 #[derive(Clone, Copy, Debug)]
 pub struct Param {
     pub name: &'static str,
     pub dim: Dim,
     pub len: usize,
     pub default: Option<f64>,
+    pub positive: bool,
 }
 
 impl Param {
     pub const fn scalar(name: &'static str, dim: Dim) -> Param {
-        Param { name, dim, len: 1, default: None }
+        Param { name, dim, len: 1, default: None, positive: false }
     }
     pub const fn vector(name: &'static str, dim: Dim) -> Param {
-        Param { name, dim, len: 3, default: None }
+        Param { name, dim, len: 3, default: None, positive: false }
     }
     pub const fn or(self, default: f64) -> Param {
         Param { default: Some(default), ..self }
+    }
+    pub const fn positive(self) -> Param {
+        Param { positive: true, ..self }
     }
 }
 
@@ -120,6 +131,20 @@ pub trait Definition {
     fn charge_share<R: Real>(_p: &[R], _s: &[&Site<R>]) -> Option<[Vec3<R>; 2]> {
         None
     }
+    /// A `Shape::Density` term's share of body a's density that body b gives (m_b W(|x_a − x_b|)
+    /// for SPH); a's own share is `density(p, a, a)`. `None` for every other shape.
+    fn density<R: Real>(_p: &[R], _a: &Site<R>, _b: &Site<R>) -> Option<R> {
+        None
+    }
+    /// A `Shape::Density` term's energy of body a at density ρ (mₐ u(ρ) for SPH).
+    fn internal<R: Real>(_p: &[R], _a: &Site<R>, _rho: R) -> Option<R> {
+        None
+    }
+    /// Whether the definition means something with parameters `p` beyond their being finite and
+    /// the `positive` ones positive: `Err((parameter, why))` if not.
+    fn accepts(_p: &[f64]) -> Result<(), (&'static str, &'static str)> {
+        Ok(())
+    }
     /// Whether an instance with parameters `p` can remove energy at all (a bond with zero
     /// damping cannot): the energy claim is a balance exactly when some instance can.
     fn dissipates(_p: &[f64]) -> bool {
@@ -135,6 +160,13 @@ pub trait Definition {
             None => f64::INFINITY,
         }
     }
+}
+
+/// A density term's energy of body `s[0]` with `s[1]` its one neighbour: `internal` at the
+/// density the two give it (the `potential` of a `Shape::Density` term).
+fn fluid_pair<D: Definition, R: Real>(p: &[R], s: &[&Site<R>]) -> R {
+    let rho = D::density(p, s[0], s[0]).and_then(|own| Some(own + D::density(p, s[0], s[1])?));
+    rho.and_then(|rho| D::internal(p, s[0], rho)).expect("a density term defines `density` and `internal`")
 }
 
 /// Constant `k` of `D::constants`: as given after the parameters in `p`, or worked out now.
@@ -174,6 +206,15 @@ macro_rules! vocabulary {
             pub fn charge_share<R: Real>(self, p: &[R], s: &[&Site<R>]) -> Option<[Vec3<R>; 2]> {
                 match self { $(Kind::$kind => $kind::charge_share(p, s)),* }
             }
+            pub fn density<R: Real>(self, p: &[R], a: &Site<R>, b: &Site<R>) -> Option<R> {
+                match self { $(Kind::$kind => $kind::density(p, a, b)),* }
+            }
+            pub fn internal<R: Real>(self, p: &[R], a: &Site<R>, rho: R) -> Option<R> {
+                match self { $(Kind::$kind => $kind::internal(p, a, rho)),* }
+            }
+            pub fn accepts(self, p: &[f64]) -> Result<(), (&'static str, &'static str)> {
+                match self { $(Kind::$kind => $kind::accepts(p)),* }
+            }
             pub fn dissipates(self, p: &[f64]) -> bool {
                 match self { $(Kind::$kind => $kind::dissipates(p)),* }
             }
@@ -208,6 +249,8 @@ vocabulary! {
     Drag => drag,
     ContactFloor => contact_floor,
     MagneticField => magnetic_field,
+    Wall => wall,
+    Sph => sph,
 }
 
 impl Kind {
@@ -347,15 +390,17 @@ mod tests {
         let reading = |f: fn(Reads) -> bool| Kind::ALL.iter().copied().filter(|k| f(k.reads())).collect::<Vec<_>>();
         // drag and the magnetic field write their zero potential as m v² · 0, for its dimension
         assert_eq!(reading(|r| r.v), [Kind::Drag, Kind::MagneticField]);
-        let massive = [Kind::Gravity, Kind::UniformAcceleration, Kind::GravityWell, Kind::Drag, Kind::MagneticField];
+        // (a fluid's density is a sum of masses)
+        let massive =
+            [Kind::Gravity, Kind::UniformAcceleration, Kind::GravityWell, Kind::Drag, Kind::MagneticField, Kind::Sph];
         assert_eq!(reading(|r| r.m), massive);
         assert_eq!(reading(|r| r.q), [Kind::Coulomb, Kind::CoulombReactionField, Kind::Yukawa, Kind::ElectricField]);
         assert_eq!(reading(|r| r.colour), [Kind::QcdCoulomb]);
     }
 
     #[test]
-    fn only_damped_bonds_and_drag_dissipate() {
+    fn only_damped_bonds_drag_floors_and_viscous_fluids_dissipate() {
         let d: Vec<_> = Kind::ALL.iter().filter(|k| k.dissipative()).collect();
-        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag, &Kind::ContactFloor]);
+        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag, &Kind::ContactFloor, &Kind::Sph]);
     }
 }

@@ -27,7 +27,9 @@ mod magnetic_field;
 mod morse_bond;
 mod nuclear_yukawa;
 mod qcd_coulomb;
+mod sph;
 mod uniform_acceleration;
+mod wall;
 mod wca;
 mod yukawa;
 
@@ -277,6 +279,8 @@ pub fn group(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -
         Kind::Drag => Fields::<drag::Fast>::boxed(kind, t),
         Kind::ContactFloor => Fields::<contact_floor::Fast>::boxed(kind, t),
         Kind::MagneticField => Fields::<magnetic_field::Fast>::boxed(kind, t),
+        Kind::Wall => Fields::<wall::Fast>::boxed(kind, t),
+        Kind::Sph => sph::Fluid::boxed(kind, t, m),
     }
 }
 

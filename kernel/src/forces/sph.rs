@@ -1,0 +1,330 @@
+//! SPH's fast force (the definition: `lagra_checker::terms::sph`). Two passes over the pairs
+//! within the kernel's support, found once per evaluation by the cell list (`traverse::pairs`:
+//! the order depends on the positions alone, so any thread count and any restart give the same
+//! bits): the densities, then each body's P/ρ², then the pressure and viscous forces of each pair.
+
+use super::derivative::{Adjoint, Direction, Wanted};
+use super::groups::OVERFLOW;
+use super::{stride_alone, Force, Frame, Parts, Singularity};
+use crate::step::Stride;
+use crate::sum::Sum;
+use crate::traverse;
+use lagra_checker::model::{Cell, Model, TermInstance};
+use lagra_checker::terms::sph::SUPPORT;
+use std::sync::Mutex;
+
+/// One instance's constants.
+#[derive(Clone, Copy)]
+struct Row {
+    h: f64,
+    rho0: f64,
+    c0: f64,
+    gamma: f64,
+    alpha: f64,
+    beta: f64,
+    /// Tait's B = ρ₀c₀²/γ.
+    b: f64,
+    /// W(0) = 21/(16πh³).
+    w0: f64,
+    reach2: f64,
+}
+
+impl Row {
+    fn new(p: &[f64]) -> Row {
+        let (h, rho0, c0, gamma) = (p[0], p[1], p[2], p[3]);
+        let reach = SUPPORT * h;
+        Row {
+            h,
+            rho0,
+            c0,
+            gamma,
+            alpha: p[4],
+            beta: p[5],
+            b: rho0 * c0 * c0 / gamma,
+            w0: 21.0 / (16.0 * std::f64::consts::PI * h * h * h),
+            reach2: reach * reach,
+        }
+    }
+
+    /// W(r) and g = −W′(r)/r at r² < reach².
+    #[inline(always)]
+    fn kernel(&self, r2: f64) -> (f64, f64) {
+        let q = r2.sqrt() / self.h;
+        let t = 1.0 - 0.5 * q;
+        let t3 = t * t * t;
+        (self.w0 * t3 * t * (2.0 * q + 1.0), 5.0 * self.w0 / (self.h * self.h) * t3)
+    }
+
+    /// u(ρ) and P/ρ²: Tait's pressure above ρ₀, none below.
+    #[inline(always)]
+    fn state(&self, rho: f64) -> (f64, f64) {
+        if rho <= self.rho0 {
+            return (0.0, 0.0);
+        }
+        let power = (rho / self.rho0).powf(self.gamma - 1.0);
+        let u = self.b / self.rho0 * (power - 1.0) / (self.gamma - 1.0) + self.b * (1.0 / rho - 1.0 / self.rho0);
+        let pressure = self.b * (power * rho / self.rho0 - 1.0);
+        (u, pressure / (rho * rho))
+    }
+}
+
+/// A pair within reach: i, j, d = xⱼ − xᵢ (nearest image), r².
+type Near = (u32, u32, [f64; 3], f64);
+
+/// What one instance found at the positions `at`: its pairs within reach, each body's P/ρ² and
+/// the energy Σ m u(ρ). A velocity-dependent force is evaluated again at the same positions
+/// (the solver's implicit closing kick), and then only the force pass is redone.
+#[derive(Default)]
+struct Found {
+    near: Vec<Near>,
+    rho: Vec<f64>,
+    pi: Vec<f64>,
+    energy: f64,
+}
+
+#[derive(Default)]
+struct Scratch {
+    at: Vec<[f64; 3]>,
+    found: Vec<Found>,
+}
+
+pub struct Fluid {
+    name: &'static str,
+    rows: Vec<Row>,
+    cell: Option<Cell>,
+    /// What the last evaluation found, kept between evaluations.
+    scratch: Mutex<Scratch>,
+}
+
+impl Fluid {
+    pub fn boxed(kind: lagra_checker::terms::Kind, t: &[(usize, &TermInstance)], m: &Model) -> Box<dyn Force> {
+        let rows = t.iter().map(|t| Row::new(&t.1.params)).collect();
+        Box::new(Fluid { name: kind.name(), rows, cell: m.cell, scratch: Mutex::default() })
+    }
+
+    /// The pairs, densities and pressures of `row` at `s`'s positions.
+    fn find(&self, row: &Row, s: &Frame, found: &mut Found) {
+        let Found { near, rho, pi, energy } = found;
+        near.clear();
+        traverse::pairs::<()>(s.x, &self.cell, Some(row.reach2.sqrt()), |i, j, d| {
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            if r2 < row.reach2 {
+                near.push((i as u32, j as u32, d, r2));
+            }
+            Ok(())
+        })
+        .expect("the visit never fails");
+        rho.clear();
+        rho.extend(s.m.iter().map(|m| m * row.w0));
+        for &(i, j, _, r2) in near.iter() {
+            let (w, _) = row.kernel(r2);
+            rho[i as usize] += s.m[j as usize] * w;
+            rho[j as usize] += s.m[i as usize] * w;
+        }
+        pi.clear();
+        let mut sum = Sum::default();
+        for (k, &r) in rho.iter().enumerate() {
+            let (u, p) = row.state(r);
+            sum.add(s.m[k] * u);
+            pi.push(p);
+        }
+        *energy = sum.value();
+    }
+
+    /// The forces added to `f`, and the energy Σ m u(ρ) and the virial −Σ d·F over the pairs.
+    fn pass(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<(f64, f64), Singularity> {
+        let mut scratch = self.scratch.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let Scratch { at, found } = &mut *scratch;
+        // the same bits, not merely equal (−0.0 and 0.0 may give forces of another sign)
+        let moved =
+            at.len() != s.x.len() || at.iter().zip(s.x).any(|(a, b)| a.map(f64::to_bits) != b.map(f64::to_bits));
+        if moved || found.len() != self.rows.len() {
+            found.resize_with(self.rows.len(), Found::default);
+            for (row, found) in self.rows.iter().zip(found.iter_mut()) {
+                self.find(row, s, found);
+            }
+            at.clear();
+            at.extend_from_slice(s.x);
+        }
+        let (mut energy, mut virial) = (Sum::default(), Sum::default());
+        for (row, Found { near, pi, energy: e, .. }) in self.rows.iter().zip(found.iter()) {
+            energy.add(*e);
+            let viscous = row.alpha != 0.0 || row.beta != 0.0;
+            for &(i, j, d, r2) in near.iter() {
+                let (i, j) = (i as usize, j as usize);
+                let (_, g) = row.kernel(r2);
+                let mm = s.m[i] * s.m[j];
+                // the force on i along d, per unit d
+                let mut along = -mm * (pi[i] + pi[j]) * g;
+                if viscous {
+                    let closing = -((s.v[i][0] - s.v[j][0]) * d[0]
+                        + (s.v[i][1] - s.v[j][1]) * d[1]
+                        + (s.v[i][2] - s.v[j][2]) * d[2]);
+                    if closing < 0.0 {
+                        let dd = r2 + 0.01 * row.h * row.h;
+                        let k = mm * g / row.rho0;
+                        let k1 = k * row.alpha * row.c0 * row.h / dd;
+                        let k2 = k * row.beta * row.h * row.h / (dd * dd);
+                        along += k1 * closing - k2 * closing * closing;
+                    }
+                }
+                for c in 0..3 {
+                    f[i][c] += along * d[c];
+                    f[j][c] -= along * d[c];
+                }
+                virial.add(-along * r2);
+            }
+        }
+        let (e, w) = (energy.value(), virial.value());
+        if e.is_finite() && w.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
+            Ok((e, w))
+        } else {
+            Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW, seen: None })
+        }
+    }
+
+    #[cold]
+    fn no_derivatives(&self) -> Singularity {
+        Singularity {
+            term: self.name,
+            bodies: vec![],
+            what: "its derivatives are not built yet (no gradients through SPH)",
+            seen: None,
+        }
+    }
+}
+
+impl Force for Fluid {
+    fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
+        stride_alone(self, stride, parts)
+    }
+    fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], _energy: bool) -> Result<f64, Singularity> {
+        self.pass(s, f).map(|(e, _)| e)
+    }
+    fn velocity_dependent(&self) -> bool {
+        self.rows.iter().any(|r| r.alpha != 0.0 || r.beta != 0.0)
+    }
+    fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>> {
+        let mut scratch = vec![[0.0; 3]; s.x.len()];
+        Some(self.pass(s, &mut scratch).map(|(_, w)| w))
+    }
+    fn tangent(&self, _s: &Frame, _dir: &Direction, _df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        Err(self.no_derivatives())
+    }
+    fn pullback(&self, _s: &Frame, _g: &[[f64; 3]], _w: &Wanted, _out: &mut Adjoint) -> Result<(), Singularity> {
+        Err(self.no_derivatives())
+    }
+    fn potential_pullback(&self, _s: &Frame, _w: &Wanted, _out: &mut Adjoint) -> Result<(), Singularity> {
+        Err(self.no_derivatives())
+    }
+    fn plan(&self) -> String {
+        let reach = self.rows.iter().map(|r| r.reach2.sqrt()).fold(0.0, f64::max);
+        format!("SPH: the pairs within {reach} from a cell list each evaluation, a density pass then a force pass, in order")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{group, Frame};
+    use crate::forces::dual::Rng;
+    use lagra_checker::model::{Body, Cell, Model, Snapshot, TermInstance, UnitSystem};
+    use lagra_checker::quantities::Lifted;
+    use lagra_checker::terms::Kind;
+    use proptest::prelude::*;
+
+    /// `n` bodies of random masses scattered about a cube 3h wide (jittered cubic lattice), with
+    /// random velocities; ρ₀ at `squeeze` times the bodies' mean density, so that some are above
+    /// it (pressed) and some below (no pressure); in a periodic box along z if `periodic`.
+    fn fluid(seed: u64, squeeze: f64, alpha: f64, beta: f64, periodic: bool) -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let mut rng = Rng::new(seed);
+        let h = 0.3;
+        let side = 5;
+        let x: Vec<[f64; 3]> = (0..side * side * side)
+            .map(|k| {
+                let ijk = [k % side, (k / side) % side, k / (side * side)];
+                std::array::from_fn(|c| (ijk[c] as f64 + 0.5) * 0.2 + rng.uniform(-0.06, 0.06))
+            })
+            .collect();
+        let v = (0..x.len()).map(|_| std::array::from_fn(|_| rng.uniform(-1.0, 1.0))).collect();
+        let bodies: Vec<Body> = (0..x.len())
+            .map(|_| Body {
+                mass: rng.uniform(0.5, 1.5) * 0.008,
+                charge: 0.0,
+                colour: [0.0; 2],
+                moments: None,
+                solid: None,
+            })
+            .collect();
+        let rho0 = squeeze * 1.0;
+        let term = TermInstance { kind: Kind::Sph, sites: vec![], params: vec![h, rho0, 10.0, 7.0, alpha, beta] };
+        let cell = periodic.then_some(Cell { size: [10.0, 10.0, 1.0], periodic: [false, false, true] });
+        let model = Model {
+            units: UnitSystem::Reduced,
+            cell,
+            bodies,
+            terms: vec![term],
+            constraints: vec![],
+            thermostat: None,
+            floor: None,
+            pins: vec![],
+        };
+        (model, x, v)
+    }
+
+    fn fast(model: &Model, x: &[[f64; 3]], v: &[[f64; 3]]) -> (Vec<[f64; 3]>, f64) {
+        let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
+        let (q, c) = (vec![0.0; x.len()], vec![[0.0; 2]; x.len()]);
+        let mut f = vec![[0.0; 3]; x.len()];
+        let e = group(Kind::Sph, &[(0, &model.terms[0])], model, &None)
+            .accumulate(&Frame { x, v, m: &m, q: &q, c: &c }, &mut f, true)
+            .unwrap();
+        (f, e)
+    }
+
+    fn snapshot<'a>(x: &'a [[f64; 3]], v: &'a [[f64; 3]]) -> Snapshot<'a> {
+        Snapshot { step: 0, t: 0.0, x, v, chain: &[], spin: &[] }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(12))]
+        /// The fast pressure forces are −∂E/∂x of the definition's energy Σ m u(ρ) (central
+        /// differences), the fast energy is that energy, and the forces sum to zero.
+        #[test]
+        fn pressure_forces_are_minus_the_gradient_of_the_definition(seed in any::<u64>(), squeeze in 0.3f64..1.2, periodic in any::<bool>()) {
+            let (model, x, v) = fluid(seed, squeeze, 0.0, 0.0, periodic);
+            let energy = |x: &[[f64; 3]]| Lifted::new(&model, &snapshot(x, &v), &0.0f64).potential(&model);
+            let (f, e) = fast(&model, &x, &v);
+            let e0 = energy(&x);
+            prop_assert!((e - e0).abs() <= 1e-12 * e0.abs().max(1e-300), "{e} vs {e0}");
+            let scale = f.iter().flatten().fold(0.0f64, |a, c| a.max(c.abs()));
+            let eps = 1e-6;
+            for b in (0..x.len()).step_by(7) {
+                for c in 0..3 {
+                    let (mut up, mut down) = (x.clone(), x.clone());
+                    up[b][c] += eps;
+                    down[b][c] -= eps;
+                    let fd = -(energy(&up) - energy(&down)) / (2.0 * eps);
+                    prop_assert!((f[b][c] - fd).abs() <= 1e-6 * scale + 1e-12, "body {b} axis {c}: {} vs {fd}", f[b][c]);
+                }
+            }
+            for c in 0..3 {
+                let total: f64 = f.iter().map(|f| f[c]).sum();
+                prop_assert!(total.abs() <= 1e-12 * scale * x.len() as f64);
+            }
+        }
+
+        /// The viscous forces remove energy at the rate the definition's dissipated power gives:
+        /// −Σ v·F_viscous = Σ over pairs of v·∂F/∂v (the checker's Q integrates that rate).
+        #[test]
+        fn viscous_forces_dissipate_the_definitions_power(seed in any::<u64>(), alpha in 0.0f64..1.0, beta in 0.0f64..2.0) {
+            let (inviscid, x, v) = fluid(seed, 0.8, 0.0, 0.0, false);
+            let (model, _, _) = fluid(seed, 0.8, alpha, beta, false);
+            let (f_all, _) = fast(&model, &x, &v);
+            let (f_pressure, _) = fast(&inviscid, &x, &v);
+            let rate: f64 = (0..x.len()).map(|b| (0..3).map(|c| v[b][c] * (f_all[b][c] - f_pressure[b][c])).sum::<f64>()).sum();
+            let power = Lifted::new(&model, &snapshot(&x, &v), &0.0f64).dissipated_power(&model);
+            prop_assert!(power >= 0.0);
+            prop_assert!((rate + power).abs() <= 1e-10 * power.abs().max(1e-300), "{rate} vs −{power}");
+        }
+    }
+}
