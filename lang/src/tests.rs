@@ -693,14 +693,14 @@ fn bad_fluids_are_refused_where_they_are_written() {
     assert_eq!(e("h: 0.13", "h: 0"), at(4, 12, "Sph.h must be positive, got 0"));
     assert_eq!(e("h: 0.13", "h: -1"), at(4, 12, "Sph.h must be positive, got -1"));
     assert_eq!(e("rest_density: 1000", "rest_density: 0"), at(4, 32, "Sph.rest_density must be positive, got 0"));
-    assert_eq!(e("sound_speed: 10", "sound_speed: -3"), at(4, 53, "Sph.sound_speed must be positive, got -3"));
+    assert_eq!(e("sound_speed: 10", "sound_speed: -3"), at(4, 51, "Sph.sound_speed must be positive, got -3"));
     assert_eq!(
         e("alpha: 0.1", "gamma: 1, alpha: 0.1"),
-        at(4, 64, "Sph.gamma must exceed 1 (the internal energy divides by γ − 1)")
+        at(4, 62, "Sph.gamma must exceed 1 (the internal energy divides by γ − 1)")
     );
     assert_eq!(
         e("h: 0.13", "kernel: 2, h: 0.13"),
-        at(4, 9, "unknown field `kernel` for Sph; expected one of: h, rest_density, sound_speed, gamma, alpha, beta")
+        at(4, 9, "unknown field `kernel` for Sph; expected h, rest_density, sound_speed, gamma, alpha, beta")
     );
     assert_eq!(
         e("sph { h", "sph { on: [0], h"),
@@ -710,7 +710,7 @@ fn bad_fluids_are_refused_where_they_are_written() {
         e("normal: [1, 0, 0]", "normal: [0, 0, 0]"),
         at(5, 18, "Wall.normal must not be zero: it says which side of the wall is the room")
     );
-    assert_eq!(e("k: 100", "k: 0"), at(5, 30, "Wall.k must be positive, got 0"));
+    assert_eq!(e("k: 100", "k: 0"), at(5, 32, "Wall.k must be positive, got 0"));
     assert_eq!(
         e("  wall { normal: [1, 0, 0], k: 100 }\n", ""),
         at(6, 12, "dam_break_front: needs a back wall, a `wall` with normal +x")

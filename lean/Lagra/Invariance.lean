@@ -183,4 +183,15 @@ theorem QcdCoulomb.quarter_turn_z (alpha sigma : Rat)  (s0 s1 : Site) :
   all_goals simp only [Site.quarterTurnZ]
   all_goals grind
 
+theorem Sph.translation (h rest_density sound_speed gamma alpha beta : Rat) (dx dy dz : Rat) (s0 s1 : Site) :
+    Sph.potential h rest_density sound_speed gamma alpha beta (s0.shift dx dy dz) (s1.shift dx dy dz) = Sph.potential h rest_density sound_speed gamma alpha beta s0 s1 := by
+  simp only [Sph.potential, Site.shift, shift_sub]
+
+theorem Sph.quarter_turn_z (h rest_density sound_speed gamma alpha beta : Rat)  (s0 s1 : Site) :
+    Sph.potential h rest_density sound_speed gamma alpha beta (s0.quarterTurnZ) (s1.quarterTurnZ) = Sph.potential h rest_density sound_speed gamma alpha beta s0 s1 := by
+  simp only [Sph.potential, Site.dot_quarterTurnZ, Site.quarterTurnZ_z, Site.quarterTurnZ_m,
+    Site.quarterTurnZ_q, Site.quarterTurnZ_c1, Site.quarterTurnZ_c2]
+  all_goals simp only [Site.quarterTurnZ]
+  all_goals grind
+
 end Lagra

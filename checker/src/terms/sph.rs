@@ -161,6 +161,34 @@ mod tests {
         }
     }
 
+    /// A model (a certificate's) whose fluid or wall means nothing is refused with the reason.
+    #[test]
+    fn a_model_with_a_meaningless_fluid_is_refused() {
+        use crate::model::{Body, Model, TermInstance, UnitSystem};
+        let refused = |kind: Kind, params: Vec<f64>| {
+            let body = Body { mass: 1.0, charge: 0.0, colour: [0.0; 2], moments: None, solid: None };
+            let model = Model {
+                units: UnitSystem::Reduced,
+                cell: None,
+                bodies: vec![body.clone(), body],
+                terms: vec![TermInstance { kind, sites: vec![], params }],
+                constraints: vec![],
+                thermostat: None,
+                floor: None,
+                pins: vec![],
+            };
+            model.validate().err()
+        };
+        assert_eq!(refused(Kind::Sph, vec![0.1, 1.0, 1.0, 7.0, 0.0, 0.0]), None);
+        assert_eq!(refused(Kind::Sph, vec![0.0, 1.0, 1.0, 7.0, 0.0, 0.0]).unwrap(), "term 0 (Sph): h must be positive");
+        assert_eq!(
+            refused(Kind::Sph, vec![0.1, 1.0, -1.0, 7.0, 0.0, 0.0]).unwrap(),
+            "term 0 (Sph): sound_speed must be positive"
+        );
+        assert!(refused(Kind::Sph, vec![0.1, 1.0, 1.0, 1.0, 0.0, 0.0]).unwrap().contains("gamma must exceed 1"));
+        assert!(refused(Kind::Wall, vec![0.0, 0.0, 0.0, 0.0, 1.0]).unwrap().contains("normal must not be zero"));
+    }
+
     /// W integrates to one: the density a body of mass m spreads over a fine lattice of points
     /// sums, times the cell volume, to m. And W vanishes at its support 2h, with its slope.
     #[test]

@@ -252,15 +252,24 @@ fn every_shipped_scene_with_a_parameter() {
             continue;
         }
         let mut scene = compile(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        // a gradient of energy@end along body 0's velocity, refused: why
+        let refusal = |scene: &Scene| {
+            let objective = Objective::parse("energy@end", scene).unwrap();
+            let wrt = params::parse_list("body[0].velocity.x", scene).unwrap();
+            let request = Request { scene, objective: &objective, wrt: &wrt, threads: 1, progress: None };
+            gradient(request, Method::Reverse).map(|_| ()).unwrap_err()
+        };
+        if scene.model.terms.iter().any(|t| t.kind.spec().shape == lagra_checker::terms::Shape::Density) {
+            let refused = refusal(&scene);
+            assert!(refused.contains("Sph (a density term) are not built yet"), "{}: {refused}", path.display());
+            continue;
+        }
         if scene.solver.integrator != Integrator::VelocityVerlet
             || !scene.model.constraints.is_empty()
             || scene.thermostat.is_some()
         {
             if scene.thermostat.is_some() {
-                let objective = Objective::parse("energy@end", &scene).unwrap();
-                let wrt = params::parse_list("body[0].velocity.x", &scene).unwrap();
-                let request = Request { scene: &scene, objective: &objective, wrt: &wrt, threads: 1, progress: None };
-                let refused = gradient(request, Method::Reverse).map(|_| ()).unwrap_err();
+                let refused = refusal(&scene);
                 assert!(refused.contains("thermostat"), "{}: {refused}", path.display());
             }
             continue;
