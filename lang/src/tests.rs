@@ -616,13 +616,7 @@ fn joints_become_pins_in_the_bodies_frames() {
 
 #[test]
 fn bad_joints_are_refused_where_they_are_written() {
-    let e = |from: &str, to: &str| {
-        let src = HINGED.replace(from, to);
-        assert_ne!(src, HINGED, "{from}");
-        let d = compile(&src).unwrap_err();
-        let (l, c) = d.line_col(&src);
-        at(l, c, &d.message)
-    };
+    let e = |from: &str, to: &str| error_in(HINGED, from, to);
     assert_eq!(
         e("ball [0, 1]", "ball [0, 2]"),
         at(6, 18, "joint: body 2 is a point mass; a joint joins solids (entities with a `shape`)")
@@ -683,13 +677,7 @@ fn a_fluid_is_one_term_on_every_body_with_its_walls() {
 
 #[test]
 fn bad_fluids_are_refused_where_they_are_written() {
-    let e = |from: &str, to: &str| {
-        let src = FLUID.replace(from, to);
-        assert_ne!(src, FLUID, "{from}");
-        let d = compile(&src).unwrap_err();
-        let (l, c) = d.line_col(&src);
-        at(l, c, &d.message)
-    };
+    let e = |from: &str, to: &str| error_in(FLUID, from, to);
     assert_eq!(e("h: 0.13", "h: 0"), at(4, 12, "Sph.h must be positive, got 0"));
     assert_eq!(e("h: 0.13", "h: -1"), at(4, 12, "Sph.h must be positive, got -1"));
     assert_eq!(e("rest_density: 1000", "rest_density: 0"), at(4, 32, "Sph.rest_density must be positive, got 0"));
