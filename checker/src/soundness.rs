@@ -217,7 +217,9 @@ proptest! {
         dir in prop::array::uniform3(-1.0f64..1.0),
         extra in 1e-6f64..10.0,
     ) {
-        for &kind in Kind::ALL {
+        // (a density term's potential holds a body's own share, which no distance removes; the
+        // shares its pairs give vanish beyond reach: `terms::sph`'s tests)
+        for &kind in Kind::ALL.iter().filter(|k| k.spec().shape != crate::terms::Shape::Density) {
             let params = &params[..kind.spec().width()];
             let reach = kind.reach(params);
             if reach.is_infinite() {
@@ -243,7 +245,7 @@ proptest! {
 fn symmetric(kind: Kind) -> (bool, bool) {
     use crate::terms::Shape;
     match kind {
-        Kind::UniformAcceleration | Kind::ElectricField | Kind::ContactFloor => (false, false),
+        Kind::UniformAcceleration | Kind::ElectricField | Kind::ContactFloor | Kind::Wall => (false, false),
         Kind::GravityWell | Kind::HarmonicTrap => (false, true),
         Kind::Drag | Kind::MagneticField => (true, true),
         k => {
@@ -284,6 +286,8 @@ proptest! {
                     "cutoff" => p[at] = 50.0,
                     "R0" => p[at] = 50.0,
                     "y" => p[at] = 5.0,
+                    // every body behind the wall, where it pushes
+                    "offset" => p[at] = 50.0,
                     _ => {}
                 }
             }
