@@ -478,7 +478,8 @@ mod tests {
     /// force, and the pullback is its transpose (g·(J u) = (Jᵀg)·u to rounding).
     #[test]
     fn tangents_are_the_forces_derivatives_and_pullbacks_their_transposes() {
-        for &kind in Kind::ALL {
+        // (a density term has no derivatives yet: its tangent says so, and `grad` refuses it)
+        for &kind in Kind::ALL.iter().filter(|k| k.spec().shape != Shape::Density) {
             for seed in 0..4 {
                 let k = case(kind, seed);
                 let n = k.x.len();
