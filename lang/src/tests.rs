@@ -42,7 +42,7 @@ fn syntax_error_says_what_was_expected() {
 fn unknown_keyword() {
     assert_eq!(
         error("solver {", "solvr {"),
-        at(5, 3, "unknown term `solvr`; known: gravity, well, trap, electric, drag, floor, magnetic")
+        at(5, 3, "unknown term `solvr`; known: gravity, well, trap, electric, drag, floor, magnetic, wall, sph")
     );
     assert_eq!(
         error("bond harmonic", "bond spring"),
