@@ -7,6 +7,7 @@ use crate::sym::Sym;
 use lagra_checker::terms::{Kind, Site};
 use lagra_noether::{Symmetry, Table, TermSymmetries, Verdict};
 use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
 use symbolica::prelude::*;
 
 /// The symbols of a term's bodies and parameters.
@@ -267,8 +268,26 @@ pub fn term(kind: Kind) -> TermSymmetries {
     row
 }
 
+/// The rows of `kinds`, each handed to `done` with the time it took as soon as it is derived
+/// (the fluid's row takes minutes: `lagra-derive` reports progress through it).
+pub fn rows(kinds: &[Kind], mut done: impl FnMut(Kind, Duration)) -> BTreeMap<String, TermSymmetries> {
+    kinds
+        .iter()
+        .map(|&k| {
+            let start = Instant::now();
+            let row = term(k);
+            done(k, start.elapsed());
+            (k.name().to_string(), row)
+        })
+        .collect()
+}
+
+/// What the table says derived it.
+pub fn derived_by() -> String {
+    format!("lagra-noether-derive {} with symbolica 3.0.0", env!("CARGO_PKG_VERSION"))
+}
+
 /// The whole table.
 pub fn table() -> Table {
-    let terms = Kind::ALL.iter().map(|&k| (k.name().to_string(), term(k))).collect();
-    Table { derived_by: format!("lagra-noether-derive {} with symbolica 3.0.0", env!("CARGO_PKG_VERSION")), terms }
+    Table { derived_by: derived_by(), terms: rows(Kind::ALL, |_, _| ()) }
 }

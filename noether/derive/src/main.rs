@@ -1,18 +1,57 @@
 //! `lagra-derive`: derives the term × symmetry table with symbolica and writes
 //! `noether/derived.json` and `docs/noether.md`; `--check` only compares them with what it
-//! derives (exit 1 if stale). Results go to files, messages to stderr: symbolica prints its
-//! licence notice on stdout, which this program does not otherwise use.
+//! derives (exit 1 if stale); `--term NAME` (repeatable) derives only those rows and takes the
+//! others from the checked-in table, for a term just added or changed. Results go to files,
+//! messages (one line per term, with its time) to stderr: symbolica prints its licence notice on
+//! stdout, which this program does not otherwise use.
 
+use lagra_checker::terms::Kind;
+use lagra_noether::Table;
 use lagra_noether_derive::{derive, lock::Exclusive, render};
 use std::path::Path;
 use std::process::ExitCode;
 
+const USAGE: &str = "usage: lagra-derive [--check] [--term NAME]...
+  derives every term's symmetries with symbolica and writes noether/derived.json and
+  docs/noether.md (from the repository root)
+  --check      compare with the checked-in files instead of writing them (exit 1 if stale)
+  --term NAME  derive only this term, named as in the table (Sph, HarmonicBond; repeatable):
+               the other rows are the checked-in ones";
+
+struct Args {
+    check: bool,
+    only: Vec<Kind>,
+}
+
+fn args() -> Result<Args, String> {
+    let mut out = Args { check: false, only: vec![] };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--check" => out.check = true,
+            "--term" => {
+                let name = it.next().ok_or("--term needs a term's name")?;
+                let kind = Kind::ALL.iter().find(|k| k.name() == name).ok_or_else(|| {
+                    let known: Vec<&str> = Kind::ALL.iter().map(|k| k.name()).collect();
+                    format!("no term is called '{name}' (known: {})", known.join(", "))
+                })?;
+                out.only.push(*kind);
+            }
+            "-h" | "--help" => return Err(String::new()),
+            other => return Err(format!("unknown argument '{other}'")),
+        }
+    }
+    Ok(out)
+}
+
 fn main() -> ExitCode {
-    let check = match std::env::args().nth(1).as_deref() {
-        None => false,
-        Some("--check") => true,
-        Some(_) => {
-            eprintln!("usage: lagra-derive [--check]\n  writes noether/derived.json and docs/noether.md (from the repository root)");
+    let args = match args() {
+        Ok(a) => a,
+        Err(e) => {
+            if !e.is_empty() {
+                eprintln!("lagra-derive: {e}");
+            }
+            eprintln!("{USAGE}");
             return ExitCode::from(2);
         }
     };
@@ -24,7 +63,22 @@ fn main() -> ExitCode {
         }
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let table = derive::table();
+    let kinds = if args.only.is_empty() { Kind::ALL } else { &args.only[..] };
+    let rows = derive::rows(kinds, |k, took| eprintln!("lagra-derive: {} derived in {:.1} s", k.name(), took.as_secs_f64()));
+    let mut table = if args.only.is_empty() {
+        Table { derived_by: derive::derived_by(), terms: Default::default() }
+    } else {
+        let path = root.join("noether/derived.json");
+        match std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string())) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("lagra-derive: --term keeps the other rows of {}, which cannot be read: {e}", path.display());
+                return ExitCode::from(2);
+            }
+        }
+    };
+    table.derived_by = derive::derived_by();
+    table.terms.extend(rows);
     let files = [
         (root.join("noether/derived.json"), serde_json::to_string_pretty(&table).expect("a table serializes") + "\n"),
         (root.join("docs/noether.md"), render::markdown(&table)),
@@ -32,7 +86,7 @@ fn main() -> ExitCode {
     let mut stale = false;
     for (path, text) in &files {
         let same = std::fs::read_to_string(path).is_ok_and(|old| &old == text);
-        if check {
+        if args.check {
             if !same {
                 eprintln!(
                     "lagra-derive: {} is stale: run `cargo run --release -p lagra-noether-derive`",
