@@ -64,12 +64,16 @@ fn main() -> ExitCode {
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let kinds = if args.only.is_empty() { Kind::ALL } else { &args.only[..] };
-    let rows = derive::rows(kinds, |k, took| eprintln!("lagra-derive: {} derived in {:.1} s", k.name(), took.as_secs_f64()));
+    let rows =
+        derive::rows(kinds, |k, took| eprintln!("lagra-derive: {} derived in {:.1} s", k.name(), took.as_secs_f64()));
     let mut table = if args.only.is_empty() {
         Table { derived_by: derive::derived_by(), terms: Default::default() }
     } else {
         let path = root.join("noether/derived.json");
-        match std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string())) {
+        match std::fs::read_to_string(&path)
+            .map_err(|e| e.to_string())
+            .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+        {
             Ok(t) => t,
             Err(e) => {
                 eprintln!("lagra-derive: --term keeps the other rows of {}, which cannot be read: {e}", path.display());
