@@ -169,7 +169,8 @@ impl<'ast> Visit<'ast> for Reach<'_> {
     }
 }
 
-/// Every `.rs` file under `src` but the test files, with its module path.
+/// Every `.rs` file under `src` but the test files (`tests.rs`, or a `tests/` folder), with its
+/// module path.
 fn sources(src: &Path) -> Vec<(PathBuf, Vec<String>)> {
     let mut out = vec![];
     let mut stack = vec![src.to_path_buf()];
@@ -177,7 +178,7 @@ fn sources(src: &Path) -> Vec<(PathBuf, Vec<String>)> {
         for e in std::fs::read_dir(&dir).unwrap() {
             let p = e.unwrap().path();
             if p.is_dir() {
-                if p.file_name().is_some_and(|n| n != "bin") {
+                if p.file_name().is_some_and(|n| n != "bin" && n != "tests") {
                     stack.push(p);
                 }
                 continue;
