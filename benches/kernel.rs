@@ -1,6 +1,7 @@
 //! Criterion benches: the kernel's force loop per term kind, the neighbour-list build, the
-//! checker's enclosure per atom, and whole runs end to end. `cargo bench --bench kernel`;
-//! `-- forces/` (a name filter) runs one group. Timings are per body (throughput), so kinds
+//! checker's enclosure per atom, and whole runs end to end. `cargo bench --profile release
+//! --bench kernel` (as shipped, fat LTO; plain `cargo bench` builds without it, as the tests
+//! are); `-- forces/` (a name filter) runs one group. Timings are per body (throughput), so kinds
 //! and sizes compare.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};

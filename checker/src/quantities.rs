@@ -177,7 +177,7 @@ impl<R: PairSum> Lifted<R> {
     /// in the pairs' order), as the nearest image sees them.
     fn fluid_energy(&self, t: &TermInstance, p: &[R]) -> R {
         let (kind, share) = (t.kind, |a: &Site<R>, b: &Site<R>| t.kind.density(p, a, b).expect("a density term"));
-        let mut rho: Vec<R> = self.sites.iter().map(|a| share(a, a)).collect();
+        let mut rho: Vec<R> = self.sites.iter().map(|a| t.kind.own_density(p, a).expect("a density term")).collect();
         for pair in Neighbourhood::new(&self.x, &self.cell, asked_reach(t), &self.ahead).of(0..self.sites.len()) {
             let (a, b) = self.sites_of(&pair);
             let (to_a, to_b) = (share(a, &b), share(&b, a));

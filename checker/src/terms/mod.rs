@@ -132,9 +132,15 @@ pub trait Definition {
         None
     }
     /// A `Shape::Density` term's share of body a's density that body b gives (m_b W(|x_a − x_b|)
-    /// for SPH); a's own share is `density(p, a, a)`. `None` for every other shape.
+    /// for SPH); a's own share is `own_density`. `None` for every other shape.
     fn density<R: Real>(_p: &[R], _a: &Site<R>, _b: &Site<R>) -> Option<R> {
         None
+    }
+    /// A's own share of its density: `density(p, a, a)`, unless the definition gives it in
+    /// closed form (SPH's mₐW(0), which the pair form reaches only through √0: a tree of zeros
+    /// that the symbolic derivation differentiates to 0⁻¹ and Lean must simplify away).
+    fn own_density<R: Real>(p: &[R], a: &Site<R>) -> Option<R> {
+        Self::density(p, a, a)
     }
     /// A `Shape::Density` term's energy of body a at density ρ (mₐ u(ρ) for SPH).
     fn internal<R: Real>(_p: &[R], _a: &Site<R>, _rho: R) -> Option<R> {
@@ -165,7 +171,7 @@ pub trait Definition {
 /// A density term's energy of body `s[0]` with `s[1]` its one neighbour: `internal` at the
 /// density the two give it (the `potential` of a `Shape::Density` term).
 fn fluid_pair<D: Definition, R: Real>(p: &[R], s: &[&Site<R>]) -> R {
-    let rho = D::density(p, s[0], s[0]).and_then(|own| Some(own + D::density(p, s[0], s[1])?));
+    let rho = D::own_density(p, s[0]).and_then(|own| Some(own + D::density(p, s[0], s[1])?));
     rho.and_then(|rho| D::internal(p, s[0], rho)).expect("a density term defines `density` and `internal`")
 }
 
@@ -208,6 +214,9 @@ macro_rules! vocabulary {
             }
             pub fn density<R: Real>(self, p: &[R], a: &Site<R>, b: &Site<R>) -> Option<R> {
                 match self { $(Kind::$kind => $kind::density(p, a, b)),* }
+            }
+            pub fn own_density<R: Real>(self, p: &[R], a: &Site<R>) -> Option<R> {
+                match self { $(Kind::$kind => $kind::own_density(p, a)),* }
             }
             pub fn internal<R: Real>(self, p: &[R], a: &Site<R>, rho: R) -> Option<R> {
                 match self { $(Kind::$kind => $kind::internal(p, a, rho)),* }

@@ -72,6 +72,11 @@ impl Definition for Sph {
         }))
     }
 
+    /// mₐW(0) = mₐ·21/(16πh³), bit for bit what `density(p, a, a)` gives (t = 1, 2q + 1 = 1).
+    fn own_density<R: Real>(p: &[R], a: &Site<R>) -> Option<R> {
+        Some(a.m.clone() * scale(&p[H]))
+    }
+
     /// mₐ u(ρ).
     fn internal<R: Real>(p: &[R], a: &Site<R>, rho: R) -> Option<R> {
         let (rho0, gamma) = (p[RHO0].clone(), p[GAMMA].clone());
@@ -83,8 +88,9 @@ impl Definition for Sph {
             b.clone() / rho0.clone() * (power - up.clone()) / (gamma.clone() - up.clone())
                 + b.clone() * (up.clone() / rho - up.clone() / rho0.clone())
         };
-        let energy = a.m.clone() * u(rho.clone());
-        Some(select(squeezed, || energy.clone(), || energy.lift(0.0) * energy.clone()))
+        // zero below ρ₀, as mₐB/ρ₀ (an energy) times 0: a small tree where u's would be large
+        let scale = a.m.clone() * b.clone() / rho0.clone();
+        Some(select(squeezed, || a.m.clone() * u(rho), || scale.lift(0.0) * scale.clone()))
     }
 
     fn rayleigh<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
@@ -158,6 +164,16 @@ mod tests {
             prop_assume!((rho - 1.0).abs() > 2.0 * eps);
             prop_assert!((slope - pressure / (rho * rho)).abs() <= 1e-6 * (1.0 + c0 * c0), "{slope} vs {}", pressure / (rho * rho));
             prop_assert!(u(1.0 + 1e-9).abs() < 1e-12 * c0 * c0 && u(1.0) == 0.0);
+        }
+    }
+
+    proptest! {
+        /// The closed form of a body's own share is the pair form at zero distance, bit for bit.
+        #[test]
+        fn own_density_is_the_pair_form_at_zero_distance(h in 0.01f64..10.0, m in 0.01f64..100.0, x in -5.0f64..5.0) {
+            let p = [h, 1.0, 1.0, 7.0, 0.0, 0.0];
+            let a = body([x, -x, 2.0 * x], m);
+            prop_assert_eq!(Sph::own_density(&p, &a).unwrap().to_bits(), Sph::density(&p, &a, &a).unwrap().to_bits());
         }
     }
 

@@ -6,7 +6,11 @@
 //! Symbolica allows one thread per user machine-wide (unlicensed, a second one is killed):
 //! everything here runs on the thread that holds `lock::Exclusive`.
 
+pub mod cli;
 pub mod derive;
 pub mod lock;
 pub mod render;
 pub mod sym;
+
+#[cfg(test)]
+mod tests;

@@ -1,11 +1,14 @@
 //! The derivation, end to end, in one test: symbolica allows one thread per user, so everything
-//! that touches it runs here in order, under the same lock `lagra-derive` takes.
+//! that touches it runs here in order, under the same lock `lagra-derive` takes. (A unit test of
+//! the library, not an integration test: an integration test would have `cargo test` build the
+//! `lagra-derive` binary with the release profile's fat LTO over all of symbolica, CI's longest
+//! link, only to start it once.)
 
+use crate::{derive, lock::Exclusive, render, sym};
 use lagra_checker::model::Snapshot;
 use lagra_checker::quantities::Lifted;
 use lagra_checker::terms::{Kind, Shape};
 use lagra_noether::{parameter_names, Symmetry, Table, Verdict};
-use lagra_noether_derive::{derive, lock::Exclusive, render, sym};
 use lagra_run::compile;
 use lagra_run::run::{run, Options};
 use lagra_run::trace::{Format, Writer};
@@ -29,11 +32,11 @@ fn the_derivation() {
         lock
     });
     wait.recv().expect("the worker took the lock");
-    // A second derivation started now must wait for this one, not be killed by symbolica's
-    // one-thread rule: it says so, and finishes once the lock is free (`--check`: exit 0 when
-    // the checked-in row is current; one term, since the whole table is derived above).
-    let mut second = std::process::Command::new(env!("CARGO_BIN_EXE_lagra-derive"))
-        .args(["--check", "--term", "HarmonicBond"])
+    // A second derivation started now, in another process (this test binary again, running the
+    // ignored test below), must wait for this one, not be killed by symbolica's one-thread rule:
+    // it says so, and finishes once the lock is free.
+    let mut second = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--ignored", "--exact", "tests::a_second_derivation", "--nocapture", "--test-threads=1"])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -44,6 +47,17 @@ fn the_derivation() {
     let out = second.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && err.contains("waiting for it"), "{:?} {err}", out.status);
+}
+
+/// The second process of `the_derivation`: takes the lock as `lagra-derive` does and derives
+/// one row, which must be the checked-in one. Not run on its own (`--ignored` runs it alone).
+#[test]
+#[ignore = "run by the_derivation as a second process, to prove that it waits for the lock"]
+fn a_second_derivation() {
+    let _lock = Exclusive::take().expect("the symbolica lock");
+    let row = std::thread::spawn(|| derive::rows(&[Kind::HarmonicBond], |_, _| ())).join().unwrap();
+    let table: Table = serde_json::from_str(lagra_noether::DERIVED).unwrap();
+    assert_eq!(row["HarmonicBond"], table.terms["HarmonicBond"]);
 }
 
 fn derivation() {
