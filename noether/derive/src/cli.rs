@@ -1,5 +1,5 @@
-//! The `lagra-derive` command (its `main` is `src/main.rs`, one line): derives the term × symmetry table with symbolica and writes
-//! `noether/derived.json` and `docs/noether.md`; `--check` only compares them with what it
+//! The `lagra-derive` command (its `main`, `src/main.rs`, is one line): derives the term ×
+//! symmetry table with symbolica and writes `noether/derived.json` and `docs/noether.md`; `--check` only compares them with what it
 //! derives (exit 1 if stale); `--term NAME` (repeatable) derives only those rows and takes the
 //! others from the checked-in table, for a term just added or changed. Results go to files,
 //! messages (one line per term, with its time) to stderr: symbolica prints its licence notice on
