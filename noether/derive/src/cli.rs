@@ -1,9 +1,10 @@
 //! The `lagra-derive` command (its `main`, `src/main.rs`, is one line): derives the term ×
-//! symmetry table with symbolica and writes `noether/derived.json` and `docs/noether.md`; `--check` only compares them with what it
-//! derives (exit 1 if stale); `--term NAME` (repeatable) derives only those rows and takes the
-//! others from the checked-in table, for a term just added or changed. Results go to files,
-//! messages (one line per term, with its time) to stderr: symbolica prints its licence notice on
-//! stdout, which this program does not otherwise use.
+//! symmetry table with symbolica and writes `noether/derived.json` and `docs/noether.md`;
+//! `--check` only compares them with what it derives (exit 1 if stale); `--term NAME`
+//! (repeatable) derives only those rows and takes the others from the checked-in table, for a
+//! term just added or changed. Results go to files, messages (one line per term, with its time)
+//! to stderr: symbolica prints its licence notice on stdout, which this program does not
+//! otherwise use.
 
 use crate::{derive, lock::Exclusive, render};
 use lagra_checker::terms::Kind;
