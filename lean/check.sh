@@ -51,8 +51,8 @@ for f in Terms Invariance; do
 done
 # The first 1,000 steps of the oscillator (2,000 checkpoints of two claims) and 500 of Kepler
 # (2,004 of four), unless LAGRA_LEAN_OSCILLATOR_STEPS / LAGRA_LEAN_KEPLER_STEPS say otherwise:
-# what is checked per checkpoint is the same at any length, and CI's time is spent once on the
-# package (docs/lean.md gives the longer runs and their times). Kepler's whole run (75,401
+# what is checked per checkpoint is the same at any length (each file has a fixed cost of about
+# 5 1/2 minutes in the WASM build; docs/lean.md gives the longer runs and their times). Kepler's whole run (75,401
 # checkpoints) checked once in 3 m 51 s at 4.8 GB, once ran the WASM heap out of memory, and
 # once did not finish in 36 minutes, even a claim per file.
 oscillator_steps=${LAGRA_LEAN_OSCILLATOR_STEPS:-1000}
