@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod check;
+pub mod fluid;
 pub mod grad;
 pub mod lean;
 pub mod list;

@@ -2,7 +2,7 @@
 
 use crate::progress::{Progress, When};
 use crate::view::PageFrames;
-use crate::{noether, report};
+use crate::{fluid, noether, report};
 use lagra_checker::certificate::{self, Certificate, Trail};
 use lagra_checker::checksum::label;
 use lagra_checker::decision::Verdict;
@@ -90,8 +90,9 @@ pub struct Args {
     /// would: the claims judged up to there, the files written, a restart file to go on from.
     #[arg(long, value_name = "STEP")]
     until: Option<u64>,
-    /// Refuse (exit 2) a scene that declares a claim its symmetries cannot support (momentum
-    /// along a floor's normal); without it that is a warning.
+    /// Refuse (exit 2) a scene that gives a warning: a claim its symmetries cannot support
+    /// (momentum along a floor's normal), or a fluid whose kernel's support holds too few
+    /// particles; without it those are warnings.
     #[arg(long)]
     strict: bool,
 }
@@ -128,7 +129,8 @@ fn bad(msg: impl std::fmt::Display) -> ExitCode {
 }
 
 /// A scene as `lagra run` runs it: compiled from its source, its `--set` and `--dt` applied,
-/// `@expect noether` expanded; with the Noether analysis and the warnings it gave.
+/// `@expect noether` expanded; with the Noether analysis and the warnings (its own, and a fluid's
+/// too few neighbours).
 #[derive(Clone)]
 pub struct Prepared {
     pub scene: Scene,
@@ -149,7 +151,8 @@ pub fn prepare(source: &str, path: &str, set: &[String], dt: Option<f64>) -> Res
         }
         scene.solver.dt = dt;
     }
-    let (analysis, warnings, generated) = noether::apply(&mut scene, path, source);
+    let (analysis, mut warnings, generated) = noether::apply(&mut scene, path, source);
+    warnings.extend(fluid::warnings(&scene, path, source));
     Ok(Prepared { scene, analysis, warnings, generated })
 }
 
@@ -204,7 +207,7 @@ pub fn main(a: Args) -> ExitCode {
     };
     prepared.warnings.iter().for_each(|w| eprintln!("{w}"));
     if a.strict && !prepared.warnings.is_empty() {
-        return bad("--strict: a declared claim contradicts the scene's symmetries (see above)");
+        return bad("--strict: the warnings above are errors");
     }
     if a.steps == Some(0) {
         return bad("--steps must be at least 1");

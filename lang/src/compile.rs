@@ -379,6 +379,7 @@ impl<'a> Compiler<'a> {
             floor: self.floor.map(|f| f.1),
             tail_corrections: tail_at,
             predictions: self.predictions.iter().map(|p| p.2).collect(),
+            terms: self.term_at,
         };
         let predictions = self
             .predictions

@@ -89,6 +89,8 @@ pub struct Spans {
     pub tail_corrections: Option<Span>,
     /// Each of `predictions`.
     pub predictions: Vec<Span>,
+    /// Each of `model.terms` (its keyword).
+    pub terms: Vec<Span>,
 }
 
 /// `equilibrate`, `sample_every`, `tail_corrections` in the solver block: the observables are
