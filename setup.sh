@@ -30,7 +30,7 @@ fi
 # The Python the tests drive Lagra from: the official MCP SDK (a client of `lagra mcp` no one
 # here wrote), in a virtual environment of the project's own (.venv, not committed).
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import mcp" >/dev/null 2>&1; then
-  echo "setup: preparing .venv with the MCP Python SDK (for tests/mcp.rs)" >&2
+  echo "setup: preparing .venv with the MCP Python SDK (for tests/end_to_end/mcp.rs)" >&2
   python3 -m venv .venv
   .venv/bin/python -m pip install --quiet --disable-pip-version-check "mcp>=2" >&2
 fi
@@ -43,7 +43,7 @@ if ! .venv/bin/python -c "import pytest, ase, numpy, matplotlib" >/dev/null 2>&1
 fi
 echo "setup: building and installing the Python package (pip install ./python) into .venv" >&2
 .venv/bin/python -m pip install --quiet --disable-pip-version-check ./python >&2
-# Chromium, headless, loads the viewer's pages in tests/view.rs.
+# Chromium, headless, loads the viewer's pages in tests/end_to_end/view.rs.
 if ! command -v chromium >/dev/null 2>&1; then
   echo "setup: installing chromium (headless, for the viewer's tests)" >&2
   sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"

@@ -1,6 +1,6 @@
 """`lagra mcp` driven by the official MCP Python SDK (PyPI `mcp`), a client no one here wrote.
 
-Run by tests/mcp.rs with the binary's path: python tests/mcp_client.py PATH/TO/lagra
+Run by tests/end_to_end/mcp.rs with the binary's path: python tests/mcp_client.py PATH/TO/lagra
 It connects as the SDK connects by default (probing the 2026-07-28 `server/discover`, falling
 back to the initialize handshake), lists the tools and the scene resources, runs the oscillator,
 runs it again with its spring constant changed and checks the predicted period moved as

@@ -1,6 +1,6 @@
 """`lagra mcp` kept in its room, driven by the official MCP Python SDK (PyPI `mcp`).
 
-Run by tests/mcp.rs: python tests/mcp_confined.py PATH/TO/lagra WORKDIR
+Run by tests/end_to_end/mcp.rs: python tests/mcp_confined.py PATH/TO/lagra WORKDIR
 WORKDIR is an empty folder the test owns. The server is started there with `--root root` (and
 its scenes inside it); the test then asks it, through every tool that takes a path, for what
 lies outside — `../`, an absolute path, a symlink inside the root pointing out — and for what

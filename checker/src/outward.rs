@@ -168,7 +168,7 @@ const FLOOR: f64 = f64::from_bits(0x2000_0000_0000_0000);
 /// times slower there than on AMD). A coordinate difference or a speed that is exactly zero
 /// (bodies on a lattice, in a plane, at rest) steps out to ±2⁻⁵¹¹, not ±2⁻¹⁰²², whose square
 /// underflowed; so near zero every end the arithmetic makes is 0 or about 2⁻⁵¹¹ or more, and
-/// their products stay normal (`tests/subnormal.rs` reads the CPU's flags over every scene).
+/// their products stay normal (`tests/end_to_end/subnormal.rs` reads the CPU's flags over every scene).
 #[inline(always)]
 fn up(r: f64) -> f64 {
     r.abs().mul_add(f64::EPSILON, r + FLOOR)
@@ -359,7 +359,7 @@ mod tests {
 
     /// A zero steps out to ±2⁻⁵¹¹, and what an enclosure of zero leads to by products, squares
     /// and sums has ends that are 0 or normal, never subnormal: no operation on them underflows
-    /// (the CPU's own flags for that are read over every scene in `tests/subnormal.rs`).
+    /// (the CPU's own flags for that are read over every scene in `tests/end_to_end/subnormal.rs`).
     #[test]
     fn a_zero_steps_out_to_ends_whose_products_stay_normal() {
         assert_eq!(FLOOR * FLOOR, f64::MIN_POSITIVE);

@@ -1,4 +1,4 @@
-//! The tools called directly (the protocol is tested end to end in tests/mcp.rs and by the
+//! The tools called directly (the protocol is tested end to end in tests/end_to_end/mcp.rs and by the
 //! official Python SDK in tests/mcp_client.py).
 
 use super::tools::call;

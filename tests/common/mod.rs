@@ -37,3 +37,17 @@ pub fn reseal(states: &Path, cert: &Path, mut b: Vec<u8>) {
     sealed.states_checksum = Some(label(sum));
     std::fs::write(cert, sealed.seal().unwrap().to_json()).unwrap();
 }
+
+/// The text of the shipped scene `scenes/NAME`.
+pub fn shipped(name: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap()
+}
+
+/// `lagra run --json ARGS`, its output and the report it printed.
+pub fn run_json(args: &[&str]) -> (Output, serde_json::Value) {
+    let mut a = vec!["run", "--json"];
+    a.extend_from_slice(args);
+    let o = lagra(&a);
+    let v = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(&o)));
+    (o, v)
+}

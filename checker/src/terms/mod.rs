@@ -159,7 +159,7 @@ pub trait Definition {
     /// The distance beyond which the term vanishes: its `cutoff` parameter if it has one, else
     /// ∞. A number on every path, not an `Option`: the compiler may compute with a value before
     /// it tests which path it is on, and an empty `Option`'s payload is whatever was in the
-    /// register — a subnormal there raised DE/UE (tests/subnormal.rs).
+    /// register — a subnormal there raised DE/UE (tests/end_to_end/subnormal.rs).
     fn reach(p: &[f64]) -> f64 {
         match Self::SPEC.params.iter().position(|q| q.name == "cutoff") {
             Some(at) => p[Self::SPEC.params[..at].iter().map(|q| q.len).sum::<usize>()],

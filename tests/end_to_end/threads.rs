@@ -2,8 +2,7 @@
 //! number of threads (oversubscribed on a small machine), the checker starts no thread per
 //! checkpoint, and a thread count the run cannot use is refused.
 
-mod common;
-use common::{lagra, stderr, stdout};
+use crate::common::{lagra, scene, stderr, stdout};
 use serde_json::Value;
 
 /// Every scene in scenes/ (and the 32,000-atom bench, whose list is cut in 15 pieces), 30 steps
@@ -70,7 +69,7 @@ fn a_checked_run_starts_no_thread_per_checkpoint() {
     let kepler = report(&["run", "scenes/kepler.lagra", "--json", "--quiet"]);
     assert_eq!(kepler["checker_helpers"], 0, "{kepler}");
     let dir = tempfile::tempdir().unwrap();
-    let liquid = common::scene(
+    let liquid = scene(
         dir.path(),
         "liquid.lagra",
         "scene liquid { entity atom { mass: 1 }
@@ -100,4 +99,43 @@ fn thread_counts_are_checked_and_the_default_is_reported() {
     let o = lagra(&["run", "scenes/oscillator.lagra", "--json", "--quiet"]);
     let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["threads"], 1);
+}
+
+/// `--threads` changes nothing but the speed: the trace is the same bytes, and `--explain`
+/// names the plan the planner chose.
+#[test]
+fn threads_give_the_same_trajectory_and_explain_shows_the_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(
+        dir.path(),
+        "melt.lagra",
+        "scene melt { entity atom { mass: 1 }
+           lattice { type: atom, density: 0.8442, cells: [11, 11, 11], temperature: 1.44, seed: 3 }
+           interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+           @expect momentum_conservation { every: 5 }
+           solver { dt: 0.005, steps: 10, steps_per_frame: 5 } }",
+    );
+    let scene = scene.to_str().unwrap();
+    let mut traces = vec![];
+    for threads in ["1", "2"] {
+        let trace = dir.path().join(format!("t{threads}.jsonl"));
+        let o = lagra(&["run", scene, "--threads", threads, "--explain", "--trace", trace.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+        assert!(stdout(&o).contains("plan        LennardJonesShifted: cluster-pair list"), "{}", stdout(&o));
+        assert!(stdout(&o).contains("piece(s) by size"), "{}", stdout(&o));
+        // where the time went: four parts of the pair term's, together within the wall time
+        let out = stdout(&o);
+        let seconds = |after: &str| -> f64 {
+            let at = out.find(after).unwrap_or_else(|| panic!("no `{after}` in {out}")) + after.len();
+            out[at..].split(' ').next().unwrap().parse().unwrap()
+        };
+        let parts: Vec<f64> = ["time: builds ", "updates ", "pieces ", "sums "].iter().map(|p| seconds(p)).collect();
+        assert!(parts[0] > 0.0 && parts[2] > 0.0, "{parts:?}");
+        assert!(parts.iter().sum::<f64>() <= seconds("wall        ") + 0.002, "{parts:?}\n{out}");
+        traces.push(std::fs::read(trace).unwrap());
+    }
+    assert!(traces[0].len() > 100_000);
+    assert!(traces[0] == traces[1], "the trajectories differ between 1 and 2 threads");
+    let o = lagra(&["run", scene, "--threads", "0"]);
+    assert_eq!((o.status.code(), stderr(&o).trim()), (Some(2), "lagra: --threads must be at least 1"));
 }

@@ -1,8 +1,7 @@
 //! End-to-end: every solver through the `lagra` binary — past its stability limit, in the
 //! report, on any number of threads, and the scenes that show it.
 
-mod common;
-use common::{lagra, scene, stdout};
+use crate::common::{lagra, run_json, scene, stdout};
 use serde_json::Value;
 
 const INTEGRATORS: [&str; 7] =
@@ -134,4 +133,23 @@ fn a_lattice_too_big_for_the_machine_is_an_error_at_its_line() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("huge.lagra:2:49: a lattice of 4000000000 bodies would need about 10000.0 GB"), "{err}");
+}
+
+/// Every integrator runs the Kepler orbit and passes its claims; at the same dt the fourth-order
+/// ones measure the period far more accurately than Verlet.
+#[test]
+fn fourth_order_integrators_beat_verlet_at_equal_dt() {
+    let dir = tempfile::tempdir().unwrap();
+    let kepler = crate::common::shipped("kepler.lagra");
+    let period_error = |integrator: &str| {
+        let p = scene(dir.path(), &format!("{integrator}.lagra"), &kepler.replace("velocity_verlet", integrator));
+        let (o, v) = run_json(&[p.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{integrator}: {v}");
+        v["predictions"][0]["rel_diff"].as_f64().unwrap()
+    };
+    let verlet = period_error("velocity_verlet");
+    for integrator in ["yoshida4", "rk4"] {
+        let e = period_error(integrator);
+        assert!(e < verlet / 1000.0, "{integrator}: {e} against Verlet's {verlet}");
+    }
 }

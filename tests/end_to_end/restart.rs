@@ -3,8 +3,7 @@
 //! verdicts; the segments' certificates re-check as one run, and a chain with a segment missing,
 //! swapped or edited does not; a restart of another scene, truncated or edited, is refused.
 
-mod common;
-use common::{lagra, scene, stderr, stdout};
+use crate::common::{lagra, scene, stderr, stdout};
 use lagra_run::restart::Restart;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

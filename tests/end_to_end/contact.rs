@@ -3,8 +3,7 @@
 //! colliding solids keep both momenta to round-off, Coulomb friction stops a slide where it
 //! should, and bad contact scenes are refused at their line.
 
-mod common;
-use common::{lagra, reseal, scene, stderr, stdout};
+use crate::common::{lagra, reseal, scene, stderr, stdout};
 
 #[test]
 fn the_pyramid_comes_to_rest_and_the_re_check_agrees() {

@@ -2,8 +2,7 @@
 //! `chromium`, which `setup.sh` installs): the 3D view is drawn, each plot has a point per frame
 //! or per checkpoint, a failing step is marked, and nothing is fetched from the network.
 
-mod common;
-use common::lagra;
+use crate::common::{lagra, scene};
 use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
@@ -116,7 +115,7 @@ fn view_reads_a_trace_with_its_scene_and_certificate() {
 fn a_tilted_box_is_drawn_tilted() {
     let dir = tempfile::tempdir().unwrap();
     for angle in [0.0, 30.0] {
-        let scene = common::scene(
+        let scene = scene(
             dir.path(),
             "box.lagra",
             &format!(

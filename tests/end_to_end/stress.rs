@@ -1,4 +1,4 @@
-//! Stability under stress. Slow: run with `cargo test --release --test stress -- --ignored`.
+//! Stability under stress. Slow: run with `cargo test --release --test end_to_end -- --ignored stress::`.
 //! Every case must end in a PASS, a certified FAIL naming its step, or a named error — never a
 //! NaN in the output, never a hang, never a panic.
 

@@ -3,8 +3,7 @@
 //! the bits do not depend on how many run at once, bad input stops the sweep before it runs,
 //! and a stopped sweep reports no PASS it did not see.
 
-mod common;
-use common::{lagra, stderr, stdout};
+use crate::common::{lagra, stderr, stdout};
 use serde_json::Value;
 use std::path::Path;
 

@@ -3,8 +3,7 @@
 //! Langevin run the same bits on any number of threads, bad input located, and a short run
 //! against the NIST table.
 
-mod common;
-use common::{lagra, reseal, scene, stderr, stdout};
+use crate::common::{lagra, reseal, scene, stderr, stdout};
 use serde_json::Value;
 use std::path::Path;
 use std::process::Command;

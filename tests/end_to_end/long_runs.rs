@@ -2,8 +2,7 @@
 //! they are made, or nowhere without a certificate), a signal stops a run with its files
 //! written, and a halt on huge coordinates says what overflowed, with the numbers.
 
-mod common;
-use common::{lagra, scene, stderr, stdout};
+use crate::common::{lagra, scene, stderr, stdout};
 use std::process::Command;
 
 /// `lagra ARGS` with its address space capped at `kib` KiB (`ulimit -v`).

@@ -1,7 +1,6 @@
 //! End-to-end: `lagra grad` and `lagra fit` through the binary — outputs, spellings, bad input.
 
-mod common;
-use common::{lagra, stderr, stdout};
+use crate::common::{lagra, stderr, stdout};
 use serde_json::Value;
 use std::path::Path;
 use std::process::Output;

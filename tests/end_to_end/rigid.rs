@@ -2,8 +2,7 @@
 //! rotation) and angular momentum certified, a rotation the checker does not account for caught,
 //! and the spins re-checked from the state file (a forged one caught).
 
-mod common;
-use common::{lagra, reseal, scene, stderr, stdout};
+use crate::common::{lagra, reseal, scene, stderr, stdout};
 use serde_json::Value;
 
 #[test]
