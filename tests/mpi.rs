@@ -2,7 +2,6 @@
 //! sweep's variants are dealt to the ranks and gathered on rank 0, with the certificates one
 //! process writes, bit for bit; `lagra run` runs the scene on rank 0 alone and says so; bad input
 //! is said once and ends the job. Every mpirun is under `timeout`: a hang fails, it does not stall.
-#![cfg(feature = "mpi")]
 
 mod common;
 use common::{lagra, stderr, stdout};

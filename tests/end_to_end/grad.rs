@@ -41,6 +41,19 @@ fn grad_json_names_every_derivative() {
     assert_eq!(v["gradient"]["body[0].velocity.y"].as_f64(), Some(0.0));
 }
 
+/// Gradients go through SPH: the dam break's energy after three steps against its viscosity,
+/// both modes agreeing (the central differences are `grad`'s unit tests, on a smaller fluid).
+#[test]
+fn grad_goes_through_the_dam_breaks_fluid() {
+    let args = ["grad", "scenes/dam_break.lagra", "--objective", "energy@end", "--wrt", "sph.alpha", "--steps", "3"];
+    let o = lagra(&[&args[..], &["--method", "check", "--json"]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = json(&o);
+    assert!(v["max_relative_difference"].as_f64().unwrap() < 1e-10, "{v}");
+    // the viscosity turns energy into heat as the column starts to fall: more of it, less left
+    assert!(v["gradient"]["sph.alpha"].as_f64().unwrap() < 0.0, "{v}");
+}
+
 #[test]
 fn grad_text_reports_value_method_and_derivatives() {
     let o =

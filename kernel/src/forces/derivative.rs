@@ -478,7 +478,7 @@ mod tests {
     /// force, and the pullback is its transpose (g·(J u) = (Jᵀg)·u to rounding).
     #[test]
     fn tangents_are_the_forces_derivatives_and_pullbacks_their_transposes() {
-        // (a density term has no derivatives yet: its tangent says so, and `grad` refuses it)
+        // (a density term needs a crowd to press: its derivatives are tested in `sph` over a block)
         for &kind in Kind::ALL.iter().filter(|k| k.spec().shape != Shape::Density) {
             for seed in 0..4 {
                 let k = case(kind, seed);

@@ -5,6 +5,7 @@
 //! round-off, energies equal).
 
 mod clusters;
+mod density_derivative;
 pub mod derivative;
 mod groups;
 mod pairs;

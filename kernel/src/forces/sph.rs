@@ -3,6 +3,7 @@
 //! the order depends on the positions alone, so any thread count and any restart give the same
 //! bits): the densities, then each body's P/ρ², then the pressure and viscous forces of each pair.
 
+use super::density_derivative::{DensityDerivative, Near};
 use super::derivative::{Adjoint, Direction, Wanted};
 use super::groups::OVERFLOW;
 use super::{stride_alone, Force, Frame, Parts, Singularity};
@@ -11,7 +12,8 @@ use crate::sum::Sum;
 use crate::traverse;
 use lagra_checker::model::{Cell, Model, TermInstance};
 use lagra_checker::terms::sph::SUPPORT;
-use std::sync::Mutex;
+use lagra_checker::terms::Kind;
+use std::sync::{Mutex, MutexGuard};
 
 /// One instance's constants.
 #[derive(Clone, Copy)]
@@ -68,9 +70,6 @@ impl Row {
     }
 }
 
-/// A pair within reach: i, j, d = xⱼ − xᵢ (nearest image), r².
-type Near = (u32, u32, [f64; 3], f64);
-
 /// What one instance found at the positions `at`: its pairs within reach, each body's P/ρ² and
 /// the energy Σ m u(ρ). A velocity-dependent force is evaluated again at the same positions
 /// (the solver's implicit closing kick), and then only the force pass is redone.
@@ -89,17 +88,20 @@ struct Scratch {
 }
 
 pub struct Fluid {
-    name: &'static str,
+    kind: Kind,
     rows: Vec<Row>,
+    /// Each row's place in the model and its parameters, for the derivatives.
+    instances: Vec<(usize, Vec<f64>)>,
     cell: Option<Cell>,
     /// What the last evaluation found, kept between evaluations.
     scratch: Mutex<Scratch>,
 }
 
 impl Fluid {
-    pub fn boxed(kind: lagra_checker::terms::Kind, t: &[(usize, &TermInstance)], m: &Model) -> Box<dyn Force> {
+    pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model) -> Box<dyn Force> {
         let rows = t.iter().map(|t| Row::new(&t.1.params)).collect();
-        Box::new(Fluid { name: kind.name(), rows, cell: m.cell, scratch: Mutex::default() })
+        let instances = t.iter().map(|t| (t.0, t.1.params.clone())).collect();
+        Box::new(Fluid { kind, rows, instances, cell: m.cell, scratch: Mutex::default() })
     }
 
     /// The pairs, densities and pressures of `row` at `s`'s positions.
@@ -131,11 +133,11 @@ impl Fluid {
         *energy = sum.value();
     }
 
-    /// The forces added to `f`, and the energy Σ m u(ρ) and the virial −Σ d·F over the pairs.
-    fn pass(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<(f64, f64), Singularity> {
+    /// What each row finds at `s`'s positions: kept from the last evaluation if they are the
+    /// same bits (−0.0 and 0.0 may give forces of another sign), found again if not.
+    fn found(&self, s: &Frame) -> MutexGuard<'_, Scratch> {
         let mut scratch = self.scratch.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         let Scratch { at, found } = &mut *scratch;
-        // the same bits, not merely equal (−0.0 and 0.0 may give forces of another sign)
         let moved =
             at.len() != s.x.len() || at.iter().zip(s.x).any(|(a, b)| a.map(f64::to_bits) != b.map(f64::to_bits));
         if moved || found.len() != self.rows.len() {
@@ -146,8 +148,22 @@ impl Fluid {
             at.clear();
             at.extend_from_slice(s.x);
         }
+        scratch
+    }
+
+    /// Each row's derivatives, over the pairs it finds at `s`.
+    fn derivatives(&self, s: &Frame, mut each: impl FnMut(&DensityDerivative)) {
+        let scratch = self.found(s);
+        for ((term, p), found) in self.instances.iter().zip(&scratch.found) {
+            each(&DensityDerivative { kind: self.kind, p, term: *term, near: &found.near });
+        }
+    }
+
+    /// The forces added to `f`, and the energy Σ m u(ρ) and the virial −Σ d·F over the pairs.
+    fn pass(&self, s: &Frame, f: &mut [[f64; 3]]) -> Result<(f64, f64), Singularity> {
+        let scratch = self.found(s);
         let (mut energy, mut virial) = (Sum::default(), Sum::default());
-        for (row, Found { near, pi, energy: e, .. }) in self.rows.iter().zip(found.iter()) {
+        for (row, Found { near, pi, energy: e, .. }) in self.rows.iter().zip(&scratch.found) {
             energy.add(*e);
             let viscous = row.alpha != 0.0 || row.beta != 0.0;
             for &(i, j, d, r2) in near.iter() {
@@ -179,17 +195,7 @@ impl Fluid {
         if e.is_finite() && w.is_finite() && f.iter().flatten().all(|c| c.is_finite()) {
             Ok((e, w))
         } else {
-            Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW, seen: None })
-        }
-    }
-
-    #[cold]
-    fn no_derivatives(&self) -> Singularity {
-        Singularity {
-            term: self.name,
-            bodies: vec![],
-            what: "its derivatives are not built yet (no gradients through SPH)",
-            seen: None,
+            Err(Singularity { term: self.kind.name(), bodies: vec![], what: OVERFLOW, seen: None })
         }
     }
 }
@@ -208,14 +214,17 @@ impl Force for Fluid {
         let mut scratch = vec![[0.0; 3]; s.x.len()];
         Some(self.pass(s, &mut scratch).map(|(_, w)| w))
     }
-    fn tangent(&self, _s: &Frame, _dir: &Direction, _df: &mut [[f64; 3]]) -> Result<(), Singularity> {
-        Err(self.no_derivatives())
+    fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity> {
+        self.derivatives(s, |d| d.tangent(s, dir, df));
+        Ok(())
     }
-    fn pullback(&self, _s: &Frame, _g: &[[f64; 3]], _w: &Wanted, _out: &mut Adjoint) -> Result<(), Singularity> {
-        Err(self.no_derivatives())
+    fn pullback(&self, s: &Frame, g: &[[f64; 3]], w: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        self.derivatives(s, |d| d.pullback(s, g, w.of(d.term), out));
+        Ok(())
     }
-    fn potential_pullback(&self, _s: &Frame, _w: &Wanted, _out: &mut Adjoint) -> Result<(), Singularity> {
-        Err(self.no_derivatives())
+    fn potential_pullback(&self, s: &Frame, w: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
+        self.derivatives(s, |d| d.potential_pullback(s, w.of(d.term), out));
+        Ok(())
     }
     fn plan(&self) -> String {
         let reach = self.rows.iter().map(|r| r.reach2.sqrt()).fold(0.0, f64::max);
@@ -281,6 +290,29 @@ mod tests {
         (f, e)
     }
 
+    /// A direction of the inputs: positions, velocities, masses, the six parameters.
+    struct Along {
+        x: Vec<[f64; 3]>,
+        v: Vec<[f64; 3]>,
+        m: Vec<f64>,
+        p: Vec<f64>,
+    }
+
+    /// The fast forces and energy with every input moved by `h` along `d`.
+    fn moved(model: &Model, x: &[[f64; 3]], v: &[[f64; 3]], d: &Along, h: f64) -> (Vec<[f64; 3]>, f64) {
+        let mut model = model.clone();
+        for (p, dp) in model.terms[0].params.iter_mut().zip(&d.p) {
+            *p += h * dp;
+        }
+        for (b, dm) in model.bodies.iter_mut().zip(&d.m) {
+            b.mass += h * dm;
+        }
+        let shift = |a: &[[f64; 3]], b: &[[f64; 3]]| -> Vec<[f64; 3]> {
+            a.iter().zip(b).map(|(a, b)| std::array::from_fn(|c| a[c] + h * b[c])).collect()
+        };
+        fast(&model, &shift(x, &d.x), &shift(v, &d.v))
+    }
+
     fn snapshot<'a>(x: &'a [[f64; 3]], v: &'a [[f64; 3]]) -> Snapshot<'a> {
         Snapshot { step: 0, t: 0.0, x, v, chain: &[], spin: &[] }
     }
@@ -325,6 +357,54 @@ mod tests {
             let power = Lifted::new(&model, &snapshot(&x, &v), &0.0f64).dissipated_power(&model);
             prop_assert!(power >= 0.0);
             prop_assert!((rate + power).abs() <= 1e-10 * power.abs().max(1e-300), "{rate} vs −{power}");
+        }
+
+        /// The derivatives from the definition (`density_derivative`): the tangent along a random
+        /// direction of positions, velocities, masses and all six parameters is the central
+        /// difference of the fast force, the pullback is its transpose (g·Ju = Jᵀg·u), and the
+        /// potential's pullback is the central difference of the energy.
+        #[test]
+        fn derivatives_are_the_fast_forces_differences_and_their_transposes(seed in any::<u64>(), squeeze in 0.5f64..1.0, alpha in 0.0f64..1.0, beta in 0.0f64..2.0, periodic in any::<bool>()) {
+            use crate::forces::derivative::{Adjoint, Direction, Wanted};
+            let (model, x, v) = fluid(seed, squeeze, alpha, beta, periodic);
+            let n = x.len();
+            let mut rng = Rng::new(seed ^ 0x5eed);
+            let mut vecs = |scale: f64| -> Vec<[f64; 3]> { (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-scale, scale))).collect() };
+            let (dx, dv, g) = (vecs(0.05), vecs(1.0), vecs(1.0));
+            let mut rng = Rng::new(seed ^ 0xd1);
+            let dm: Vec<f64> = (0..n).map(|_| rng.uniform(-0.004, 0.004)).collect();
+            let dp: Vec<f64> = [0.03, 0.2, 2.0, 1.0, 0.5, 0.5].iter().map(|s| rng.uniform(-s, *s)).collect();
+            let along = Along { x: dx, v: dv, m: dm, p: dp };
+            let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
+            let (q, c) = (vec![0.0; n], vec![[0.0; 2]; n]);
+            let frame = Frame { x: &x, v: &v, m: &m, q: &q, c: &c };
+            let force = group(Kind::Sph, &[(0, &model.terms[0])], &model, &None);
+            let params = vec![along.p.clone()];
+            let dir = Direction { x: &along.x, v: &along.v, m: &along.m, q: &q, params: &params };
+            let mut df = vec![[0.0; 3]; n];
+            force.tangent(&frame, &dir, &mut df).unwrap();
+            let h = 1e-6;
+            let ((plus, e_plus), (minus, e_minus)) = (moved(&model, &x, &v, &along, h), moved(&model, &x, &v, &along, -h));
+            let scale = df.iter().flatten().fold(1e-300f64, |a, c| a.max(c.abs()));
+            for b in 0..n {
+                for c in 0..3 {
+                    let fd = (plus[b][c] - minus[b][c]) / (2.0 * h);
+                    prop_assert!((fd - df[b][c]).abs() <= 1e-5 * scale, "body {b} axis {c}: tangent {} vs difference {fd}", df[b][c]);
+                }
+            }
+            let dot3 = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 { a.iter().zip(b).map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).sum() };
+            let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(a, b)| a * b).sum() };
+            let wanted = Wanted { params: vec![(0..6).collect()], masses: true, charges: false };
+            let mut out = Adjoint::zero(n, &model.terms);
+            force.pullback(&frame, &g, &wanted, &mut out).unwrap();
+            let forward = dot3(&g, &df);
+            let reverse = dot3(&out.x, &along.x) + dot3(&out.v, &along.v) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
+            prop_assert!((forward - reverse).abs() <= 1e-10 * (forward.abs() + scale), "g·Ju {forward} vs Jᵀg·u {reverse}");
+            let mut out = Adjoint::zero(n, &model.terms);
+            force.potential_pullback(&frame, &wanted, &mut out).unwrap();
+            let slope = dot3(&out.x, &along.x) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
+            let fd = (e_plus - e_minus) / (2.0 * h);
+            prop_assert!((slope - fd).abs() <= 1e-6 * (fd.abs() + e_plus.abs()), "dU {slope} vs difference {fd}");
         }
     }
 }

@@ -97,10 +97,6 @@ impl<'a> Run<'a> {
                 scene.solver.integrator.name()
             ));
         }
-        if let Some(t) = scene.model.terms.iter().find(|t| t.kind.spec().shape == lagra_checker::terms::Shape::Density)
-        {
-            return Err(format!("gradients through {} (a density term) are not built yet", t.kind.name()));
-        }
         if let Some(t) = &scene.thermostat {
             return Err(format!(
                 "gradients go through plain velocity_verlet steps; the adjoint of a {} thermostat is not built yet",
