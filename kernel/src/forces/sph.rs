@@ -359,52 +359,82 @@ mod tests {
             prop_assert!((rate + power).abs() <= 1e-10 * power.abs().max(1e-300), "{rate} vs −{power}");
         }
 
-        /// The derivatives from the definition (`density_derivative`): the tangent along a random
-        /// direction of positions, velocities, masses and all six parameters is the central
-        /// difference of the fast force, the pullback is its transpose (g·Ju = Jᵀg·u), and the
-        /// potential's pullback is the central difference of the energy.
+        /// The derivatives from the definition (`density_derivative`) against the fast force.
         #[test]
         fn derivatives_are_the_fast_forces_differences_and_their_transposes(seed in any::<u64>(), squeeze in 0.5f64..1.0, alpha in 0.0f64..1.0, beta in 0.0f64..2.0, periodic in any::<bool>()) {
-            use crate::forces::derivative::{Adjoint, Direction, Wanted};
-            let (model, x, v) = fluid(seed, squeeze, alpha, beta, periodic);
-            let n = x.len();
-            let mut rng = Rng::new(seed ^ 0x5eed);
-            let mut vecs = |scale: f64| -> Vec<[f64; 3]> { (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-scale, scale))).collect() };
-            let (dx, dv, g) = (vecs(0.05), vecs(1.0), vecs(1.0));
-            let mut rng = Rng::new(seed ^ 0xd1);
-            let dm: Vec<f64> = (0..n).map(|_| rng.uniform(-0.004, 0.004)).collect();
-            let dp: Vec<f64> = [0.03, 0.2, 2.0, 1.0, 0.5, 0.5].iter().map(|s| rng.uniform(-s, *s)).collect();
-            let along = Along { x: dx, v: dv, m: dm, p: dp };
-            let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
-            let (q, c) = (vec![0.0; n], vec![[0.0; 2]; n]);
-            let frame = Frame { x: &x, v: &v, m: &m, q: &q, c: &c };
-            let force = group(Kind::Sph, &[(0, &model.terms[0])], &model, &None);
-            let params = vec![along.p.clone()];
-            let dir = Direction { x: &along.x, v: &along.v, m: &along.m, q: &q, params: &params };
-            let mut df = vec![[0.0; 3]; n];
-            force.tangent(&frame, &dir, &mut df).unwrap();
-            let h = 1e-6;
-            let ((plus, e_plus), (minus, e_minus)) = (moved(&model, &x, &v, &along, h), moved(&model, &x, &v, &along, -h));
-            let scale = df.iter().flatten().fold(1e-300f64, |a, c| a.max(c.abs()));
-            for b in 0..n {
-                for c in 0..3 {
-                    let fd = (plus[b][c] - minus[b][c]) / (2.0 * h);
-                    prop_assert!((fd - df[b][c]).abs() <= 1e-5 * scale, "body {b} axis {c}: tangent {} vs difference {fd}", df[b][c]);
-                }
-            }
-            let dot3 = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 { a.iter().zip(b).map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).sum() };
-            let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(a, b)| a * b).sum() };
-            let wanted = Wanted { params: vec![(0..6).collect()], masses: true, charges: false };
-            let mut out = Adjoint::zero(n, &model.terms);
-            force.pullback(&frame, &g, &wanted, &mut out).unwrap();
-            let forward = dot3(&g, &df);
-            let reverse = dot3(&out.x, &along.x) + dot3(&out.v, &along.v) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
-            prop_assert!((forward - reverse).abs() <= 1e-10 * (forward.abs() + scale), "g·Ju {forward} vs Jᵀg·u {reverse}");
-            let mut out = Adjoint::zero(n, &model.terms);
-            force.potential_pullback(&frame, &wanted, &mut out).unwrap();
-            let slope = dot3(&out.x, &along.x) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
-            let fd = (e_plus - e_minus) / (2.0 * h);
-            prop_assert!((slope - fd).abs() <= 1e-6 * (fd.abs() + e_plus.abs()), "dU {slope} vs difference {fd}");
+            derivatives_hold(seed, squeeze, alpha, beta, periodic)?;
         }
+    }
+
+    /// The tangent along a random direction of positions, velocities, masses and all six
+    /// parameters is the central difference of the fast force, the pullback is its transpose
+    /// (g·Ju = Jᵀg·u), and the potential's pullback is the central difference of the energy.
+    /// The fast force has switches — a pair's viscosity acts only while it approaches, the
+    /// pressure only above ρ₀ — where it has no derivative: a case with one within the
+    /// difference's step (the differences over h and h/4 disagree) is set aside, not judged.
+    fn derivatives_hold(seed: u64, squeeze: f64, alpha: f64, beta: f64, periodic: bool) -> Result<(), TestCaseError> {
+        use crate::forces::derivative::{Adjoint, Direction, Wanted};
+        let (model, x, v) = fluid(seed, squeeze, alpha, beta, periodic);
+        let n = x.len();
+        let mut rng = Rng::new(seed ^ 0x5eed);
+        let mut vecs = |scale: f64| -> Vec<[f64; 3]> {
+            (0..n).map(|_| std::array::from_fn(|_| rng.uniform(-scale, scale))).collect()
+        };
+        let (dx, dv, g) = (vecs(0.05), vecs(1.0), vecs(1.0));
+        let mut rng = Rng::new(seed ^ 0xd1);
+        let dm: Vec<f64> = (0..n).map(|_| rng.uniform(-0.004, 0.004)).collect();
+        let dp: Vec<f64> = [0.03, 0.2, 2.0, 1.0, 0.5, 0.5].iter().map(|s| rng.uniform(-s, *s)).collect();
+        let along = Along { x: dx, v: dv, m: dm, p: dp };
+        let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
+        let (q, c) = (vec![0.0; n], vec![[0.0; 2]; n]);
+        let frame = Frame { x: &x, v: &v, m: &m, q: &q, c: &c };
+        let force = group(Kind::Sph, &[(0, &model.terms[0])], &model, &None);
+        let params = vec![along.p.clone()];
+        let dir = Direction { x: &along.x, v: &along.v, m: &along.m, q: &q, params: &params };
+        let mut df = vec![[0.0; 3]; n];
+        force.tangent(&frame, &dir, &mut df).unwrap();
+        let h = 1e-6;
+        let ((plus, e_plus), (minus, e_minus)) = (moved(&model, &x, &v, &along, h), moved(&model, &x, &v, &along, -h));
+        let ((plus4, _), (minus4, _)) =
+            (moved(&model, &x, &v, &along, h / 4.0), moved(&model, &x, &v, &along, -h / 4.0));
+        let scale = df.iter().flatten().fold(1e-300f64, |a, c| a.max(c.abs()));
+        for b in 0..n {
+            for c in 0..3 {
+                let fd = (plus[b][c] - minus[b][c]) / (2.0 * h);
+                let fd4 = (plus4[b][c] - minus4[b][c]) / (h / 2.0);
+                prop_assume!((fd - fd4).abs() <= 1e-6 * scale, "a switch within the difference step");
+                prop_assert!(
+                    (fd - df[b][c]).abs() <= 1e-5 * scale,
+                    "body {b} axis {c}: tangent {} vs difference {fd}",
+                    df[b][c]
+                );
+            }
+        }
+        let dot3 = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 {
+            a.iter().zip(b).map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).sum()
+        };
+        let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(a, b)| a * b).sum() };
+        let wanted = Wanted { params: vec![(0..6).collect()], masses: true, charges: false };
+        let mut out = Adjoint::zero(n, &model.terms);
+        force.pullback(&frame, &g, &wanted, &mut out).unwrap();
+        let forward = dot3(&g, &df);
+        let reverse =
+            dot3(&out.x, &along.x) + dot3(&out.v, &along.v) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
+        prop_assert!((forward - reverse).abs() <= 1e-10 * (forward.abs() + scale), "g·Ju {forward} vs Jᵀg·u {reverse}");
+        let mut out = Adjoint::zero(n, &model.terms);
+        force.potential_pullback(&frame, &wanted, &mut out).unwrap();
+        let slope = dot3(&out.x, &along.x) + dot(&out.m, &along.m) + dot(&out.params[0], &along.p);
+        let fd = (e_plus - e_minus) / (2.0 * h);
+        prop_assert!((slope - fd).abs() <= 1e-6 * (fd.abs() + e_plus.abs()), "dU {slope} vs difference {fd}");
+        Ok(())
+    }
+
+    /// The case CI's run drew on 2026-11-28 (tangent 0.6533115 against a difference of
+    /// 0.6532184 at body 32, a switch within the step): set aside or held, never failed.
+    #[test]
+    fn the_case_ci_drew_is_not_failed() {
+        let outcome =
+            derivatives_hold(15674834107194876332, 0.73405433473918, 0.46391827199462843, 1.9973510973611344, false);
+        assert!(!matches!(outcome, Err(TestCaseError::Fail(_))), "{outcome:?}");
     }
 }
