@@ -2,10 +2,12 @@
 """The dam break's convergence study (docs/bench/fluids.md): the surge front against Martin &
 Moyce (1952) at three particle spacings, and the run time per particle-step, from one command:
 
-    python3 bench/dam_break_study.py [ACROSS ...]      # default 8 12 16; needs target/release/lagra
+    python3 bench/dam_break_study.py [--kernel cubic_spline] [ACROSS ...]
+                                            # default 8 12 16; needs target/release/lagra
 
 Each resolution is scenes/generate.py's dam break with ACROSS particles across the column
-(2·ACROSS up, 8 layers periodic in z), run without its claims (the kernel's time alone)."""
+(2·ACROSS up, 8 layers periodic in z), smoothed by the kernel (default wendland_c2), run
+without its claims (the kernel's time alone)."""
 
 import json
 import subprocess
@@ -17,10 +19,11 @@ ROOT = Path(__file__).resolve().parent.parent
 LAGRA = ROOT / "target" / "release" / "lagra"
 
 
-def run(across):
+def run(across, kernel):
     with tempfile.TemporaryDirectory() as d:
         scene = Path(d) / f"dam_break_{across}.lagra"
-        subprocess.run([sys.executable, ROOT / "scenes" / "generate.py", "--dam-break", str(across), scene], check=True)
+        generate = [sys.executable, ROOT / "scenes" / "generate.py", "--dam-break", str(across), scene, kernel]
+        subprocess.run(generate, check=True)
         out = subprocess.run([LAGRA, "run", scene, "--json", "--quiet"], capture_output=True, text=True)
         report = json.loads(out.stdout)
     p = report["predictions"][0]
@@ -31,8 +34,14 @@ def run(across):
 
 
 def main():
-    sizes = [int(a) for a in sys.argv[1:]] or [8, 12, 16]
-    rows = [(a, *run(a)) for a in sizes]
+    args = sys.argv[1:]
+    kernel = "wendland_c2"
+    if args[:1] == ["--kernel"]:
+        kernel, args = args[1], args[2:]
+    sizes = [int(a) for a in args] or [8, 12, 16]
+    rows = [(a, *run(a, kernel)) for a in sizes]
+    print(f"kernel: {kernel}")
+    print()
     print("| across | particles | steps | wall s | µs per particle-step | worst z/a ratio to M&M |")
     print("|---|---|---|---|---|---|")
     for a, bodies, report, _, worst in rows:

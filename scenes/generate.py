@@ -214,9 +214,17 @@ def bead_block():
     write("bead_block", "// A block of beads with bond tension, a floor and gravity (an elastic solid).\n", lines)
 
 
-def wendland_lattice_sum(h_over_dx):
-    """Σ W(|r|)·dx³ over a simple cubic lattice of spacing dx, for Wendland's C² kernel of
-    smoothing length h: the density a body of mass 1 per dx³ sees inside the lattice."""
+def smoothing(kernel, q):
+    """W(q h)·h³ of the smoothing kernel named as in `sph { kernel: .. }`, for q < 2."""
+    if kernel == "wendland_c2":
+        return 21 / (16 * math.pi) * (1 - q / 2) ** 4 * (2 * q + 1)
+    assert kernel == "cubic_spline", kernel
+    return (1 - 1.5 * q * q + 0.75 * q**3 if q < 1 else 0.25 * (2 - q) ** 3) / math.pi
+
+
+def lattice_sum(h_over_dx, kernel="wendland_c2"):
+    """Σ W(|r|)·dx³ over a simple cubic lattice of spacing dx, for the kernel of smoothing
+    length h: the density a body of mass 1 per dx³ sees inside the lattice."""
     reach = int(math.ceil(2 * h_over_dx))
     total = 0.0
     for i in range(-reach, reach + 1):
@@ -224,20 +232,21 @@ def wendland_lattice_sum(h_over_dx):
             for k in range(-reach, reach + 1):
                 q = math.sqrt(i * i + j * j + k * k) / h_over_dx
                 if q < 2:
-                    total += (1 - q / 2) ** 4 * (2 * q + 1)
-    return total * 21 / (16 * math.pi * h_over_dx**3)
+                    total += smoothing(kernel, q)
+    return total / h_over_dx**3
 
 
-def dam_break(name="dam_break", across=12, checked=True, path=None):
+def dam_break(name="dam_break", across=12, checked=True, path=None, kernel="wendland_c2"):
     """Martin & Moyce's column (width a, height 2a) collapsing along a tank 5a long: a slab of
     `across` × 2·`across` particles and 8 layers periodic in z (quasi-2-D), weakly compressible
-    SPH, walls and a floor as frictionless penalties."""
+    SPH smoothed by `kernel`, walls and a floor as frictionless penalties."""
     a, g, rho0 = 0.5, 9.81, 1000.0
     dx = a / across
     h = 1.3 * dx
     layers = 8
     c0 = 10 * math.sqrt(g * 2 * a)
-    mass = rho0 * dx**3 / wendland_lattice_sum(1.3)
+    mass = rho0 * dx**3 / lattice_sum(1.3, kernel)
+    chosen = "" if kernel == "wendland_c2" else f"kernel: {kernel}, "
     k = 2e4
     length = 5 * a
     lines = [
@@ -255,7 +264,7 @@ def dam_break(name="dam_break", across=12, checked=True, path=None):
         for l in range(layers)
     ]
     lines += [
-        f"  sph {{ h: {h:.12g} m, rest_density: {rho0:g} kg/m^3, sound_speed: {c0:.12g} m/s, gamma: 7, alpha: 0.05 }}",
+        f"  sph {{ {chosen}h: {h:.12g} m, rest_density: {rho0:g} kg/m^3, sound_speed: {c0:.12g} m/s, gamma: 7, alpha: 0.05 }}",
         "  // the walls hold the particles' centres half a spacing inside the tank's faces (a wall adds",
         "  // no density, so a fluid that had to reach the face first would slump)",
         f"  wall {{ normal: [1, 0, 0], offset: {dx / 2:.12g} m, k: {k:g} N/m }}      // the tank's back wall",
@@ -477,8 +486,9 @@ def stack_10000(path):
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--dam-break"]:
-        # a resolution for the convergence study: --dam-break ACROSS PATH
-        dam_break("dam_break", int(sys.argv[2]), checked=False, path=sys.argv[3])
+        # a resolution for the convergence study: --dam-break ACROSS PATH [KERNEL]
+        kernel = sys.argv[4] if len(sys.argv) > 4 else "wendland_c2"
+        dam_break("dam_break", int(sys.argv[2]), checked=False, path=sys.argv[3], kernel=kernel)
         sys.exit(0)
     if sys.argv[1:2] == ["--stack-10000"]:
         stack_10000(sys.argv[2])

@@ -6,7 +6,7 @@
 //! that gives a few.
 
 use lagra_checker::model::Cell;
-use lagra_checker::terms::{sph::SUPPORT, Kind};
+use lagra_checker::terms::{sph::SUPPORT, Shape};
 use lagra_kernel::traverse;
 use lagra_lang::{Diagnostic, Scene};
 
@@ -35,7 +35,7 @@ pub fn warnings(scene: &Scene, path: &str, source: &str) -> Vec<String> {
         .terms
         .iter()
         .zip(&scene.spans.terms)
-        .filter(|(t, _)| t.kind == Kind::Sph)
+        .filter(|(t, _)| t.kind.spec().shape == Shape::Density)
         .filter_map(|(t, at)| {
             let h = t.params[0];
             let mut counts = neighbour_counts(&scene.x0, &model.cell, SUPPORT * h);
@@ -81,7 +81,7 @@ mod tests {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/dam_break.lagra");
         let source = std::fs::read_to_string(path).unwrap();
         let scene = lagra_lang::compile(&source).unwrap();
-        let h = scene.model.terms.iter().find(|t| t.kind == Kind::Sph).unwrap().params[0];
+        let h = scene.model.terms.iter().find(|t| t.kind.spec().shape == Shape::Density).unwrap().params[0];
         let mut counts = neighbour_counts(&scene.x0, &scene.model.cell, SUPPORT * h);
         counts.sort_unstable();
         assert_eq!((counts[0], counts[counts.len() / 2]), (31, 80));

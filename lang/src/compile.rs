@@ -1,7 +1,7 @@
 //! From the parse tree to a [`Scene`]: templates resolved, terms looked up in the checker's
 //! vocabulary, every number checked for dimension and converted, every index checked.
 
-use crate::block::{flags, typed, value_span, Block, Reader};
+use crate::block::{flags, typed, value_span, word, Block, Reader};
 use crate::diagnostic::{Diagnostic, Span};
 use crate::prediction::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Sampling, Scene, Spans};
@@ -150,9 +150,11 @@ impl<'a> Compiler<'a> {
             Rule::bond => {
                 let kw = next().and(next()).expect("bond keyword");
                 let idx = next().expect("indices");
-                let kind = lookup(&kw, |s| matches!(s, Shape::Bond(_)), "bond")?;
+                let bond = |s| matches!(s, Shape::Bond(_));
+                let mut block = Block::read(next(), kw.as_span().into())?;
+                let kind = chosen(&kw, bond, lookup(&kw, bond, "bond")?, &mut block)?;
                 let indices = listed(&idx, kind.name(), kind.spec().shape.arity())?;
-                let params = self.params(kind, Block::read(next(), kw.as_span().into())?, kw.as_span().into())?;
+                let params = self.params(kind, block, kw.as_span().into())?;
                 self.terms.push(TermInstance { kind, sites: indices.iter().map(|i| i.0).collect(), params });
                 self.term_at.push(kw.as_span().into());
                 self.term_line.push(kw.line_col().0);
@@ -181,9 +183,10 @@ impl<'a> Compiler<'a> {
                     ("term", Shape::External)
                 };
                 // a fluid is written like an external term: its density's pairs are its own
-                let kind = lookup(&kw, |s| s == shape || (shape == Shape::External && s == Shape::Density), what)?;
-                let shape = kind.spec().shape;
+                let fits = |s| s == shape || (shape == Shape::External && s == Shape::Density);
                 let mut block = Block::read(next(), kw.as_span().into())?;
+                let kind = chosen(&kw, fits, lookup(&kw, fits, what)?, &mut block)?;
+                let shape = kind.spec().shape;
                 if kind == Kind::ContactFloor && block.get("k").is_none() {
                     return self.rigid_floor(block, kw.as_span().into());
                 }
@@ -287,7 +290,8 @@ impl<'a> Compiler<'a> {
                 (None, None) => return err(at, format!("{} needs `{}` ({})", spec.name, p.name, typed(p.dim))),
             }
         }
-        let names: Vec<&str> = spec.params.iter().map(|p| p.name).collect();
+        // (a variant's field was taken when it chose the term)
+        let names: Vec<&str> = spec.params.iter().map(|p| p.name).chain(kind.variant().map(|v| v.field)).collect();
         b.check_names(spec.name, &names)?;
         if let Err((name, why)) = kind.accepts(&out) {
             let span = written.iter().find(|w| w.0 == name).map_or(at, |w| w.1);
@@ -456,8 +460,28 @@ fn listed(idx: &Pair, owner: &str, arity: usize) -> Result<Vec<(usize, Span)>, D
 }
 
 fn lookup(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, what: &str) -> Result<Kind, Diagnostic> {
-    Kind::lookup(kw.as_str(), fits).ok_or_else(|| {
-        let known: Vec<_> = Kind::ALL.iter().filter(|k| fits(k.spec().shape)).map(|k| k.spec().keyword).collect();
+    Kind::lookup(kw.as_str(), fits, None).ok_or_else(|| {
+        let mut known: Vec<_> = Kind::ALL.iter().filter(|k| fits(k.spec().shape)).map(|k| k.spec().keyword).collect();
+        known.dedup();
         Diagnostic::new(kw.as_span().into(), format!("unknown {what} `{}`; known: {}", kw.as_str(), known.join(", ")))
+    })
+}
+
+/// The term among those of `kind`'s keyword that the block's choice selects (`sph { kernel:
+/// cubic_spline }`), the field taken from the block; `kind` where there is no choice to make.
+fn chosen(kw: &Pair, fits: impl Fn(Shape) -> bool + Copy, kind: Kind, block: &mut Block) -> Result<Kind, Diagnostic> {
+    let Some(variant) = kind.variant() else { return Ok(kind) };
+    let Some(field) = block.take(variant.field) else { return Ok(kind) };
+    let (value, at) = word(&field, kw.as_str())?;
+    Kind::lookup(kw.as_str(), fits, Some(value)).ok_or_else(|| {
+        let known: Vec<_> = Kind::ALL
+            .iter()
+            .filter(|k| k.spec().keyword == kw.as_str() && fits(k.spec().shape))
+            .filter_map(|k| k.variant().map(|v| v.value))
+            .collect();
+        Diagnostic::new(
+            at,
+            format!("unknown {} `{value}` for {}; known: {}", variant.field, kw.as_str(), known.join(", ")),
+        )
     })
 }

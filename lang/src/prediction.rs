@@ -6,7 +6,7 @@
 
 use crate::thermostat::Bath;
 use lagra_checker::model::Model;
-use lagra_checker::terms::Kind;
+use lagra_checker::terms::{Kind, Shape};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
@@ -77,7 +77,7 @@ pub struct Column {
 
 impl Column {
     pub fn of(model: &Model, x0: &[[f64; 3]]) -> Result<Column, String> {
-        if !model.terms.iter().any(|t| t.kind == Kind::Sph) {
+        if !model.terms.iter().any(|t| t.kind.spec().shape == Shape::Density) {
             return Err("needs a fluid (`sph`)".into());
         }
         let back = |t: &&lagra_checker::model::TermInstance| {

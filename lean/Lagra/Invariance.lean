@@ -194,4 +194,15 @@ theorem Sph.quarter_turn_z (h rest_density sound_speed gamma alpha beta : Rat)  
   all_goals simp only [Site.quarterTurnZ]
   all_goals grind
 
+theorem SphCubicSpline.translation (h rest_density sound_speed gamma alpha beta : Rat) (dx dy dz : Rat) (s0 s1 : Site) :
+    SphCubicSpline.potential h rest_density sound_speed gamma alpha beta (s0.shift dx dy dz) (s1.shift dx dy dz) = SphCubicSpline.potential h rest_density sound_speed gamma alpha beta s0 s1 := by
+  simp only [SphCubicSpline.potential, Site.shift, shift_sub]
+
+theorem SphCubicSpline.quarter_turn_z (h rest_density sound_speed gamma alpha beta : Rat)  (s0 s1 : Site) :
+    SphCubicSpline.potential h rest_density sound_speed gamma alpha beta (s0.quarterTurnZ) (s1.quarterTurnZ) = SphCubicSpline.potential h rest_density sound_speed gamma alpha beta s0 s1 := by
+  simp only [SphCubicSpline.potential, Site.dot_quarterTurnZ, Site.quarterTurnZ_z, Site.quarterTurnZ_m,
+    Site.quarterTurnZ_q, Site.quarterTurnZ_c1, Site.quarterTurnZ_c2]
+  all_goals simp only [Site.quarterTurnZ]
+  all_goals grind
+
 end Lagra

@@ -81,6 +81,15 @@ impl Param {
     }
 }
 
+/// A choice written in a term's block that selects among the terms of one keyword (`sph {
+/// kernel: cubic_spline }`): the field, and the value that selects this term. A block without
+/// the field gets the first such term of `vocabulary!`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Variant {
+    pub field: &'static str,
+    pub value: &'static str,
+}
+
 #[derive(Debug)]
 pub struct Spec {
     /// The canonical name, used in the graph, the certificate and messages (`HarmonicBond`).
@@ -101,6 +110,8 @@ impl Spec {
 /// One term's physics, written once.
 pub trait Definition {
     const SPEC: Spec;
+    /// What selects this term among those of its keyword, if others share it.
+    const VARIANT: Option<Variant> = None;
     /// Potential energy of the sites `s` (in the order the shape gives) with parameters `p`
     /// (flattened in the order of `SPEC.params`).
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R;
@@ -194,6 +205,9 @@ macro_rules! vocabulary {
             pub fn spec(self) -> &'static Spec {
                 match self { $(Kind::$kind => &<$kind as Definition>::SPEC),* }
             }
+            pub fn variant(self) -> Option<Variant> {
+                match self { $(Kind::$kind => <$kind as Definition>::VARIANT),* }
+            }
             pub fn potential<R: Real>(self, p: &[R], s: &[&Site<R>]) -> R {
                 match self { $(Kind::$kind => $kind::potential(p, s)),* }
             }
@@ -260,7 +274,10 @@ vocabulary! {
     MagneticField => magnetic_field,
     Wall => wall,
     Sph => sph,
+    SphCubicSpline => sph_cubic_spline,
 }
+
+pub mod smoothing;
 
 impl Kind {
     pub fn name(self) -> &'static str {
@@ -366,9 +383,14 @@ impl Kind {
         Ok(())
     }
 
-    /// The term selected by `keyword` among the terms whose shape satisfies `fits`.
-    pub fn lookup(keyword: &str, fits: impl Fn(Shape) -> bool) -> Option<Kind> {
-        Kind::ALL.iter().copied().find(|k| k.spec().keyword == keyword && fits(k.spec().shape))
+    /// The term selected by `keyword` among the terms whose shape satisfies `fits`, and among
+    /// those by the value `chosen` of their variant's field (`None`: the first of them).
+    pub fn lookup(keyword: &str, fits: impl Fn(Shape) -> bool, chosen: Option<&str>) -> Option<Kind> {
+        Kind::ALL.iter().copied().find(|k| {
+            k.spec().keyword == keyword
+                && fits(k.spec().shape)
+                && chosen.is_none_or(|c| k.variant().is_some_and(|v| v.value == c))
+        })
     }
 }
 
@@ -380,8 +402,10 @@ mod tests {
     fn every_keyword_is_unique_per_shape() {
         for a in Kind::ALL {
             for b in Kind::ALL {
-                if a != b && a.spec().keyword == b.spec().keyword {
-                    assert_ne!(a.spec().shape, b.spec().shape, "{a:?} and {b:?} collide");
+                if a != b && a.spec().keyword == b.spec().keyword && a.spec().shape == b.spec().shape {
+                    // one keyword, one shape: told apart by one field's values
+                    let (Some(va), Some(vb)) = (a.variant(), b.variant()) else { panic!("{a:?} and {b:?} collide") };
+                    assert!(va.field == vb.field && va.value != vb.value, "{a:?} and {b:?} collide");
                 }
             }
         }
@@ -400,8 +424,15 @@ mod tests {
         // drag and the magnetic field write their zero potential as m v² · 0, for its dimension
         assert_eq!(reading(|r| r.v), [Kind::Drag, Kind::MagneticField]);
         // (a fluid's density is a sum of masses)
-        let massive =
-            [Kind::Gravity, Kind::UniformAcceleration, Kind::GravityWell, Kind::Drag, Kind::MagneticField, Kind::Sph];
+        let massive = [
+            Kind::Gravity,
+            Kind::UniformAcceleration,
+            Kind::GravityWell,
+            Kind::Drag,
+            Kind::MagneticField,
+            Kind::Sph,
+            Kind::SphCubicSpline,
+        ];
         assert_eq!(reading(|r| r.m), massive);
         assert_eq!(reading(|r| r.q), [Kind::Coulomb, Kind::CoulombReactionField, Kind::Yukawa, Kind::ElectricField]);
         assert_eq!(reading(|r| r.colour), [Kind::QcdCoulomb]);
@@ -410,6 +441,16 @@ mod tests {
     #[test]
     fn only_damped_bonds_drag_floors_and_viscous_fluids_dissipate() {
         let d: Vec<_> = Kind::ALL.iter().filter(|k| k.dissipative()).collect();
-        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag, &Kind::ContactFloor, &Kind::Sph]);
+        assert_eq!(d, [&Kind::HarmonicBond, &Kind::Drag, &Kind::ContactFloor, &Kind::Sph, &Kind::SphCubicSpline]);
+    }
+
+    #[test]
+    fn a_kernel_selects_among_the_fluids() {
+        let fluid = |s: Shape| s == Shape::Density;
+        assert_eq!(Kind::lookup("sph", fluid, None), Some(Kind::Sph));
+        assert_eq!(Kind::lookup("sph", fluid, Some("wendland_c2")), Some(Kind::Sph));
+        assert_eq!(Kind::lookup("sph", fluid, Some("cubic_spline")), Some(Kind::SphCubicSpline));
+        assert_eq!(Kind::lookup("sph", fluid, Some("quintic")), None);
+        assert_eq!(Kind::lookup("harmonic", |s| s == Shape::Bond(2), Some("cubic_spline")), None);
     }
 }

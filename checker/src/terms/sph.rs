@@ -1,8 +1,9 @@
 //! Weakly compressible smoothed particle hydrodynamics, from its Lagrangian
 //! L = Σₐ mₐ(|vₐ|²/2 − u(ρₐ)) (Monaghan 2005, Rep. Prog. Phys. 68 1703; Price 2012, J. Comput.
 //! Phys. 231 759). The density is a sum over the bodies within reach, ρₐ = Σ_b m_b W(|xₐ − x_b|)
-//! (a's own share included), with Wendland's C² kernel W(r) = 21/(16πh³) (1 − q/2)⁴ (2q + 1),
-//! q = r/h < 2. The equation of state is Tait's, P = B((ρ/ρ₀)^γ − 1), B = ρ₀c₀²/γ, held at zero
+//! (a's own share included), with a smoothing kernel W of support 2h (`smoothing`: Wendland's C²,
+//! the term `Sph`, or the cubic spline, `SphCubicSpline`). The equation of state is Tait's,
+//! P = B((ρ/ρ₀)^γ − 1), B = ρ₀c₀²/γ, held at zero
 //! below ρ₀ (a free surface, where the sum lacks neighbours, would otherwise pull), and u is its
 //! integral du/dρ = P/ρ²: for ρ > ρ₀, u = (B/ρ₀)((ρ/ρ₀)^(γ−1) − 1)/(γ − 1) + B(1/ρ − 1/ρ₀), zero
 //! below — continuous with its derivative, so the forces −∂(Σ mu)/∂x are the familiar
@@ -15,11 +16,19 @@
 //! from them by about 1% where the flow is weakly compressible), so that Π is a function of the
 //! pair alone and its heat is a pair sum like any damped bond's.
 
-use super::{Definition, Param, Shape, Site, Spec};
+use super::smoothing::{Smoothing, WendlandC2};
+use super::{Definition, Param, Shape, Site, Spec, Variant};
 use crate::real::{dot3, norm2, select, sub3, Real};
 use crate::units::Dim;
+use std::marker::PhantomData;
 
-pub struct Sph;
+pub use super::smoothing::SUPPORT;
+
+/// A Tait fluid smoothed by the kernel `K`.
+pub struct TaitFluid<K>(PhantomData<K>);
+
+/// The fluid with Wendland's C² kernel, the one `sph { .. }` gives.
+pub type Sph = TaitFluid<WendlandC2>;
 
 /// h, ρ₀, c₀, γ, α, β, in `p`.
 const H: usize = 0;
@@ -29,13 +38,14 @@ const GAMMA: usize = 3;
 const ALPHA: usize = 4;
 const BETA: usize = 5;
 
-/// W's support, in smoothing lengths.
-pub const SUPPORT: f64 = 2.0;
-
-/// 21/(16π h³): W at q = 0.
-fn scale<R: Real>(h: &R) -> R {
-    h.lift(21.0) / (h.lift(16.0 * std::f64::consts::PI) * h.clone().powi(3))
-}
+const PARAMS: &[Param] = &[
+    Param::scalar("h", Dim::LENGTH).positive(),
+    Param::scalar("rest_density", Dim::DENSITY).positive(),
+    Param::scalar("sound_speed", Dim::VELOCITY).positive(),
+    Param::scalar("gamma", Dim::NONE).or(7.0).positive(),
+    Param::scalar("alpha", Dim::NONE).or(0.0),
+    Param::scalar("beta", Dim::NONE).or(0.0),
+];
 
 /// `inside(r², q)` while q = r/h < 2, zero (as `zero`) beyond.
 fn within<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>, zero: R, inside: impl FnOnce(R, R) -> R) -> R {
@@ -44,37 +54,23 @@ fn within<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>, zero: R, inside: impl FnOn
     select(r2.lt(&reach2), || inside(r2.clone(), r2.clone().sqrt() / p[H].clone()), || zero.lift(0.0) * zero)
 }
 
-impl Definition for Sph {
-    const SPEC: Spec = Spec {
-        name: "Sph",
-        keyword: "sph",
-        shape: Shape::Density,
-        params: &[
-            Param::scalar("h", Dim::LENGTH).positive(),
-            Param::scalar("rest_density", Dim::DENSITY).positive(),
-            Param::scalar("sound_speed", Dim::VELOCITY).positive(),
-            Param::scalar("gamma", Dim::NONE).or(7.0).positive(),
-            Param::scalar("alpha", Dim::NONE).or(0.0),
-            Param::scalar("beta", Dim::NONE).or(0.0),
-        ],
-    };
+impl<K: Smoothing> Definition for TaitFluid<K> {
+    const SPEC: Spec = Spec { name: K::NAME, keyword: "sph", shape: Shape::Density, params: PARAMS };
+    const VARIANT: Option<Variant> = Some(Variant { field: "kernel", value: K::KERNEL });
 
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R {
-        super::fluid_pair::<Sph, R>(p, s)
+        super::fluid_pair::<Self, R>(p, s)
     }
 
     /// m_b W(|xₐ − x_b|).
     fn density<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>) -> Option<R> {
         let zero = b.m.clone() / p[H].clone().powi(3);
-        Some(within(p, a, b, zero, |_, q| {
-            let t = q.lift(1.0) - q.lift(0.5) * q.clone();
-            b.m.clone() * scale(&p[H]) * t.powi(4) * (q.lift(2.0) * q.clone() + q.lift(1.0))
-        }))
+        Some(within(p, a, b, zero, |_, q| K::weight(&p[H], b.m.clone(), q)))
     }
 
-    /// mₐW(0) = mₐ·21/(16πh³), bit for bit what `density(p, a, a)` gives (t = 1, 2q + 1 = 1).
+    /// mₐW(0), bit for bit what `density(p, a, a)` gives.
     fn own_density<R: Real>(p: &[R], a: &Site<R>) -> Option<R> {
-        Some(a.m.clone() * scale(&p[H]))
+        Some(K::own(&p[H], a.m.clone()))
     }
 
     /// mₐ u(ρ).
@@ -94,12 +90,12 @@ impl Definition for Sph {
     }
 
     fn rayleigh<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
-        Some(viscous(p, s, |k1, k2, v| k1 * v.lift(0.5) * v.clone().powi(2) - k2 * v.lift(1.0 / 3.0) * v.powi(3)))
+        Some(viscous::<K, R>(p, s, |k1, k2, v| k1 * v.lift(0.5) * v.clone().powi(2) - k2 * v.lift(1.0 / 3.0) * v.powi(3)))
     }
 
     /// v·∂F/∂v = s ∂F/∂s = k₁s² − k₂s³.
     fn power<R: Real>(p: &[R], s: &[&Site<R>]) -> Option<R> {
-        Some(viscous(p, s, |k1, k2, v| k1 * v.clone().powi(2) - k2 * v.powi(3)))
+        Some(viscous::<K, R>(p, s, |k1, k2, v| k1 * v.clone().powi(2) - k2 * v.powi(3)))
     }
 
     /// u divides by γ − 1.
@@ -122,7 +118,7 @@ impl Definition for Sph {
 
 /// `f(k₁, k₂, s)` for a pair approaching (s = v_ab·x_ab < 0) within reach, with
 /// k₁ = mₐm_b g α c₀ h/(ρ₀D) and k₂ = mₐm_b g β h²/(ρ₀D²); zero (as a power) otherwise.
-fn viscous<R: Real>(p: &[R], s: &[&Site<R>], f: impl FnOnce(R, R, R) -> R) -> R {
+fn viscous<K: Smoothing, R: Real>(p: &[R], s: &[&Site<R>], f: impl FnOnce(R, R, R) -> R) -> R {
     let (a, b) = (s[0], s[1]);
     let closing = dot3(&sub3(&a.v, &b.v), &sub3(&a.x, &b.x));
     let h = p[H].clone();
@@ -130,8 +126,7 @@ fn viscous<R: Real>(p: &[R], s: &[&Site<R>], f: impl FnOnce(R, R, R) -> R) -> R 
     let zero = a.m.clone() * norm2(&a.v) * p[C0].clone() / h.clone();
     let approaching = closing.lt(&closing.lift(0.0));
     within(p, a, b, zero.clone(), |r2, q| {
-        let t = q.lift(1.0) - q.lift(0.5) * q;
-        let g = h.lift(5.0) * scale(&h) / h.clone().powi(2) * t.powi(3);
+        let g = K::g(&h, q);
         let d = r2 + h.lift(0.01) * h.clone().powi(2);
         let mm = a.m.clone() * b.m.clone() * g / p[RHO0].clone();
         let k1 = mm.clone() * p[ALPHA].clone() * p[C0].clone() * h.clone() / d.clone();
@@ -143,6 +138,7 @@ fn viscous<R: Real>(p: &[R], s: &[&Site<R>], f: impl FnOnce(R, R, R) -> R) -> R 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::terms::smoothing::CubicSpline;
     use crate::terms::Kind;
     use proptest::prelude::*;
 
@@ -167,14 +163,48 @@ mod tests {
         }
     }
 
+    /// The fluid's kinds: one per smoothing kernel.
+    const FLUIDS: [Kind; 2] = [Kind::Sph, Kind::SphCubicSpline];
+
     proptest! {
         /// The closed form of a body's own share is the pair form at zero distance, bit for bit.
         #[test]
         fn own_density_is_the_pair_form_at_zero_distance(h in 0.01f64..10.0, m in 0.01f64..100.0, x in -5.0f64..5.0) {
             let p = [h, 1.0, 1.0, 7.0, 0.0, 0.0];
             let a = body([x, -x, 2.0 * x], m);
-            prop_assert_eq!(Sph::own_density(&p, &a).unwrap().to_bits(), Sph::density(&p, &a, &a).unwrap().to_bits());
+            for k in FLUIDS {
+                prop_assert_eq!(k.own_density(&p, &a).unwrap().to_bits(), k.density(&p, &a, &a).unwrap().to_bits());
+            }
         }
+
+        /// g = −W′(r)/r: the viscosity's g is the slope of the density's kernel (central
+        /// differences), away from the cubic spline's seam at q = 1.
+        #[test]
+        fn g_is_the_kernels_slope_over_r(h in 0.05f64..5.0, q in 0.01f64..1.99) {
+            let p = [h, 1.0, 1.0, 7.0, 0.0, 0.0];
+            let (source, eps) = (body([0.0; 3], 1.0), 1e-6 * h);
+            prop_assume!((q - 1.0).abs() > 1e-4);
+            let w = |k: Kind, r: f64| k.density(&p, &body([r, 0.0, 0.0], 1.0), &source).unwrap();
+            let r = q * h;
+            let g = [WendlandC2::g(&h, q), CubicSpline::g(&h, q)];
+            for (k, g) in FLUIDS.into_iter().zip(g) {
+                let slope = (w(k, r + eps) - w(k, r - eps)) / (2.0 * eps);
+                prop_assert!((g + slope / r).abs() <= 1e-6 * g.abs().max(1.0 / h.powi(5)), "{k:?}: g {g} vs {}", -slope / r);
+            }
+        }
+    }
+
+    /// The cubic spline's two pieces meet at q = 1 with their value and slope.
+    #[test]
+    fn the_cubic_splines_pieces_meet() {
+        let (h, source) = (0.7, body([0.0; 3], 1.0));
+        let p = [h, 1.0, 1.0, 7.0, 0.0, 0.0];
+        let w = |r: f64| Kind::SphCubicSpline.density(&p, &body([r, 0.0, 0.0], 1.0), &source).unwrap();
+        let w0 = 1.0 / (std::f64::consts::PI * h.powi(3));
+        assert!((w(h) - w0 / 4.0).abs() < 1e-15 * w0);
+        assert!((w(h * (1.0 - 1e-9)) - w(h * (1.0 + 1e-9))).abs() < 1e-8 * w0);
+        let g = |q: f64| CubicSpline::g(&h, q);
+        assert!((g(1.0 - 1e-12) - g(1.0)).abs() < 1e-9 * g(1.0) && (g(1.0) * h.powi(5) * std::f64::consts::PI - 0.75).abs() < 1e-12);
     }
 
     /// A model (a certificate's) whose fluid or wall means nothing is refused with the reason.
@@ -208,24 +238,26 @@ mod tests {
     /// W integrates to one: the density a body of mass m spreads over a fine lattice of points
     /// sums, times the cell volume, to m. And W vanishes at its support 2h, with its slope.
     #[test]
-    fn the_kernel_is_normalised_and_vanishes_at_its_support() {
+    fn each_kernel_is_normalised_and_vanishes_at_its_support() {
         let (h, step) = (1.0, 0.05);
         let p = [h, 1.0, 1.0, 7.0, 0.0, 0.0];
         let n = (SUPPORT * h / step).ceil() as i32 + 1;
         let source = body([0.0; 3], 2.0);
-        let mut total = 0.0;
-        for i in -n..=n {
-            for j in -n..=n {
-                for k in -n..=n {
-                    let at = body([i as f64 * step, j as f64 * step, k as f64 * step], 1.0);
-                    total += Sph::density(&p, &at, &source).unwrap() * step.powi(3);
+        for k in FLUIDS {
+            let mut total = 0.0;
+            for i in -n..=n {
+                for j in -n..=n {
+                    for l in -n..=n {
+                        let at = body([i as f64 * step, j as f64 * step, l as f64 * step], 1.0);
+                        total += k.density(&p, &at, &source).unwrap() * step.powi(3);
+                    }
                 }
             }
+            assert!((total - 2.0).abs() < 1e-4, "{k:?}: {total}");
+            let edge = |r: f64| k.density(&p, &body([r, 0.0, 0.0], 1.0), &source).unwrap();
+            assert_eq!(edge(SUPPORT * h), 0.0);
+            assert!(edge(SUPPORT * h * (1.0 - 1e-4)) < 1e-11, "{k:?}");
+            assert_eq!(k.reach(&p), 2.0);
         }
-        assert!((total - 2.0).abs() < 1e-4, "{total}");
-        let edge = |r: f64| Sph::density(&p, &body([r, 0.0, 0.0], 1.0), &source).unwrap();
-        assert_eq!(edge(SUPPORT * h), 0.0);
-        assert!(edge(SUPPORT * h * (1.0 - 1e-4)) < 1e-14);
-        assert_eq!(Kind::Sph.reach(&p), 2.0);
     }
 }

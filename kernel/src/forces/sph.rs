@@ -15,9 +15,17 @@ use lagra_checker::terms::sph::SUPPORT;
 use lagra_checker::terms::Kind;
 use std::sync::{Mutex, MutexGuard};
 
+/// The smoothing kernel W (`lagra_checker::terms::smoothing`).
+#[derive(Clone, Copy, PartialEq)]
+enum Smoothing {
+    WendlandC2,
+    CubicSpline,
+}
+
 /// One instance's constants.
 #[derive(Clone, Copy)]
 struct Row {
+    smoothing: Smoothing,
     h: f64,
     rho0: f64,
     c0: f64,
@@ -26,16 +34,21 @@ struct Row {
     beta: f64,
     /// Tait's B = ρ₀c₀²/γ.
     b: f64,
-    /// W(0) = 21/(16πh³).
+    /// W(0): 21/(16πh³) for Wendland's C², 1/(πh³) for the cubic spline.
     w0: f64,
     reach2: f64,
 }
 
 impl Row {
-    fn new(p: &[f64]) -> Row {
+    fn new(kind: Kind, p: &[f64]) -> Row {
         let (h, rho0, c0, gamma) = (p[0], p[1], p[2], p[3]);
         let reach = SUPPORT * h;
+        let (smoothing, w0) = match kind {
+            Kind::SphCubicSpline => (Smoothing::CubicSpline, 1.0 / (std::f64::consts::PI * h * h * h)),
+            _ => (Smoothing::WendlandC2, 21.0 / (16.0 * std::f64::consts::PI * h * h * h)),
+        };
         Row {
+            smoothing,
             h,
             rho0,
             c0,
@@ -43,7 +56,7 @@ impl Row {
             alpha: p[4],
             beta: p[5],
             b: rho0 * c0 * c0 / gamma,
-            w0: 21.0 / (16.0 * std::f64::consts::PI * h * h * h),
+            w0,
             reach2: reach * reach,
         }
     }
@@ -52,9 +65,19 @@ impl Row {
     #[inline(always)]
     fn kernel(&self, r2: f64) -> (f64, f64) {
         let q = r2.sqrt() / self.h;
-        let t = 1.0 - 0.5 * q;
-        let t3 = t * t * t;
-        (self.w0 * t3 * t * (2.0 * q + 1.0), 5.0 * self.w0 / (self.h * self.h) * t3)
+        let k = self.w0 / (self.h * self.h);
+        match self.smoothing {
+            Smoothing::WendlandC2 => {
+                let t = 1.0 - 0.5 * q;
+                let t3 = t * t * t;
+                (self.w0 * t3 * t * (2.0 * q + 1.0), 5.0 * k * t3)
+            }
+            Smoothing::CubicSpline if q < 1.0 => (self.w0 * (1.0 - q * q * (1.5 - 0.75 * q)), k * (3.0 - 2.25 * q)),
+            Smoothing::CubicSpline => {
+                let t = 2.0 - q;
+                (self.w0 * 0.25 * t * t * t, k * 0.75 * t * t / q)
+            }
+        }
     }
 
     /// u(ρ) and P/ρ²: Tait's pressure above ρ₀, none below.
@@ -99,7 +122,7 @@ pub struct Fluid {
 
 impl Fluid {
     pub fn boxed(kind: Kind, t: &[(usize, &TermInstance)], m: &Model) -> Box<dyn Force> {
-        let rows = t.iter().map(|t| Row::new(&t.1.params)).collect();
+        let rows = t.iter().map(|t| Row::new(kind, &t.1.params)).collect();
         let instances = t.iter().map(|t| (t.0, t.1.params.clone())).collect();
         Box::new(Fluid { kind, rows, instances, cell: m.cell, scratch: Mutex::default() })
     }
@@ -243,7 +266,8 @@ mod tests {
 
     /// `n` bodies of random masses scattered about a cube 3h wide (jittered cubic lattice), with
     /// random velocities; ρ₀ at `squeeze` times the bodies' mean density, so that some are above
-    /// it (pressed) and some below (no pressure); in a periodic box along z if `periodic`.
+    /// it (pressed) and some below (no pressure); in a periodic box along z if `periodic`. The
+    /// seed's parity picks the kernel: Wendland's C² (`Sph`) or the cubic spline.
     fn fluid(seed: u64, squeeze: f64, alpha: f64, beta: f64, periodic: bool) -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let mut rng = Rng::new(seed);
         let h = 0.3;
@@ -265,7 +289,8 @@ mod tests {
             })
             .collect();
         let rho0 = squeeze * 1.0;
-        let term = TermInstance { kind: Kind::Sph, sites: vec![], params: vec![h, rho0, 10.0, 7.0, alpha, beta] };
+        let kind = if seed % 2 == 0 { Kind::Sph } else { Kind::SphCubicSpline };
+        let term = TermInstance { kind, sites: vec![], params: vec![h, rho0, 10.0, 7.0, alpha, beta] };
         let cell = periodic.then_some(Cell { size: [10.0, 10.0, 1.0], periodic: [false, false, true] });
         let model = Model {
             units: UnitSystem::Reduced,
@@ -284,7 +309,7 @@ mod tests {
         let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
         let (q, c) = (vec![0.0; x.len()], vec![[0.0; 2]; x.len()]);
         let mut f = vec![[0.0; 3]; x.len()];
-        let e = group(Kind::Sph, &[(0, &model.terms[0])], model, &None)
+        let e = group(model.terms[0].kind, &[(0, &model.terms[0])], model, &None)
             .accumulate(&Frame { x, v, m: &m, q: &q, c: &c }, &mut f, true)
             .unwrap();
         (f, e)
@@ -388,7 +413,7 @@ mod tests {
         let m: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
         let (q, c) = (vec![0.0; n], vec![[0.0; 2]; n]);
         let frame = Frame { x: &x, v: &v, m: &m, q: &q, c: &c };
-        let force = group(Kind::Sph, &[(0, &model.terms[0])], &model, &None);
+        let force = group(model.terms[0].kind, &[(0, &model.terms[0])], &model, &None);
         let params = vec![along.p.clone()];
         let dir = Direction { x: &along.x, v: &along.v, m: &along.m, q: &q, params: &params };
         let mut df = vec![[0.0; 3]; n];

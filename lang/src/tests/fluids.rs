@@ -29,6 +29,19 @@ fn a_fluid_is_one_term_on_every_body_with_its_walls() {
 }
 
 #[test]
+fn a_kernel_chooses_the_fluids_term() {
+    use lagra_checker::terms::Kind;
+    let kind = |with: &str| compile(&FLUID.replace("h: 0.13", with)).unwrap().model.terms[0].kind;
+    assert_eq!(kind("kernel: cubic_spline, h: 0.13"), Kind::SphCubicSpline);
+    assert_eq!(kind("kernel: \"cubic_spline\", h: 0.13"), Kind::SphCubicSpline);
+    assert_eq!(kind("kernel: wendland_c2, h: 0.13"), Kind::Sph);
+    assert_eq!(kind("h: 0.13"), Kind::Sph);
+    // the parameters are the same six
+    let s = compile(&FLUID.replace("h: 0.13", "kernel: cubic_spline, h: 0.13")).unwrap();
+    assert_eq!(s.model.terms[0].params, [0.13, 1000.0, 10.0, 7.0, 0.1, 0.0]);
+}
+
+#[test]
 fn bad_fluids_are_refused_where_they_are_written() {
     let e = |from: &str, to: &str| error_in(FLUID, from, to);
     assert_eq!(e("h: 0.13", "h: 0"), at(4, 12, "Sph.h must be positive, got 0"));
@@ -39,9 +52,14 @@ fn bad_fluids_are_refused_where_they_are_written() {
         e("alpha: 0.1", "gamma: 1, alpha: 0.1"),
         at(4, 62, "Sph.gamma must exceed 1 (the internal energy divides by γ − 1)")
     );
+    assert_eq!(e("h: 0.13", "kernel: 2, h: 0.13"), at(4, 17, "sph.kernel expects a name, found `2`"));
     assert_eq!(
-        e("h: 0.13", "kernel: 2, h: 0.13"),
-        at(4, 9, "unknown field `kernel` for Sph; expected h, rest_density, sound_speed, gamma, alpha, beta")
+        e("h: 0.13", "kernel: quintic, h: 0.13"),
+        at(4, 17, "unknown kernel `quintic` for sph; known: wendland_c2, cubic_spline")
+    );
+    assert_eq!(
+        e("h: 0.13", "kernal: cubic_spline, h: 0.13"),
+        at(4, 9, "unknown field `kernal` for Sph; expected h, rest_density, sound_speed, gamma, alpha, beta, kernel")
     );
     assert_eq!(
         e("sph { h", "sph { on: [0], h"),

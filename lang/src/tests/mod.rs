@@ -312,7 +312,9 @@ fn every_parameter_of_every_term_rejects_a_wrong_unit() {
                     format!("{}: {value} {unit}", p.name)
                 })
                 .collect();
-            let body = fields.join(", ");
+            // (a term that shares its keyword is chosen by its variant's field)
+            let chosen = kind.variant().map(|v| format!("{}: {}, ", v.field, v.value)).unwrap_or_default();
+            let body = chosen + &fields.join(", ");
             let term = match spec.shape {
                 Shape::Bond(n) => format!(
                     "bond {} [{}] {{ {body} }}",
