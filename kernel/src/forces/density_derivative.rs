@@ -31,9 +31,9 @@ struct Seed {
 }
 
 impl Seed {
-    fn x(c: usize, by: f64) -> Seed {
+    fn x(c: usize) -> Seed {
         let mut s = Seed::default();
-        s.x[c] = by;
+        s.x[c] = 1.0;
         s
     }
     fn v(c: usize) -> Seed {
@@ -60,7 +60,7 @@ impl Input {
     /// The outer seeds on the two sites.
     fn seeds(self) -> [Seed; 2] {
         match self {
-            Input::X(c) => [Seed::x(c, 1.0), Seed::default()],
+            Input::X(c) => [Seed::x(c), Seed::default()],
             Input::V(c) => [Seed::v(c), Seed::default()],
             Input::M(k) => std::array::from_fn(|s| if s == k { Seed::m() } else { Seed::default() }),
             Input::P(_) => [Seed::default(); 2],
@@ -184,7 +184,7 @@ impl DensityDerivative<'_> {
             let (i, j) = (near.0 as usize, near.1 as usize);
             let inner = [moving(i), moving(j)];
             for c in 0..3 {
-                let sites = Self::pair(s, near, inner, [Seed::x(c, 1.0), Seed::default()]);
+                let sites = Self::pair(s, near, inner, [Seed::x(c), Seed::default()]);
                 let mut along = self.psi(&p, &sites, [kappa[i], kappa[j]]).d.d;
                 let sites = Self::pair(s, near, inner, [Seed::v(c), Seed::default()]);
                 along += self.rayleigh(&p, &sites).map_or(0.0, |r| r.d.d);
