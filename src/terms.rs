@@ -20,6 +20,14 @@ pub fn table() -> String {
                 (format!("`{}`", spec.keyword), "every body, through the density of its neighbours".to_string())
             }
         };
+        // a term that shares its keyword is written with its variant's field
+        let written = match k.variant() {
+            Some(v) if Kind::lookup(spec.keyword, |s| s == spec.shape, None) == Some(*k) => {
+                format!("{written} (`{}: {}`, the default)", v.field, v.value)
+            }
+            Some(v) => format!("{written} with `{}: {}`", v.field, v.value),
+            None => written,
+        };
         let params: Vec<String> = spec
             .params
             .iter()
