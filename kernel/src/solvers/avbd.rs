@@ -5,13 +5,14 @@
 //!
 //! solved body by body: each body's six degrees of freedom take one Newton step against the
 //! inertial term and its contacts with the others held still, bodies of one colour (no contact
-//! between them) at once. A contact is three rows (normal, two tangents), each a hard
+//! between them) at once, the colours from the ground up (a body's level is its distance in
+//! contacts from the floor, so a sweep carries support up a tower in one pass). A contact is three rows (normal, two tangents), each a hard
 //! constraint C ≥ 0 (or C = 0 for sticking friction) held by an augmented Lagrangian: the force
 //! F = k C + λ, clamped (push only; friction inside Coulomb's disc μ|Fₙ|); after each sweep λ
 //! takes the force and, where the bound does not bind, the stiffness k ramps by β|C|, so the
 //! constraint stiffens only as far as it is violated. λ and k start from last step's contact of
-//! the same pair nearest the point (decayed by γ), so a resting stack starts each step with its
-//! weight already carried.
+//! the same pair nearest the point (λ at half, k decayed by γ), so a resting stack starts each
+//! step with part of its weight already carried.
 //!
 //! A body's unknown is its move over the step, Δ = (Δx, Δθ): its centre's displacement and its
 //! turn as a rotation vector (the pose at the end is x₀ + Δx, exp(Δθ) q₀). A contact row is
@@ -53,14 +54,30 @@ const STABILISE: f64 = 0.95;
 /// `scenes/hinged_chain.lagra` (|ΔH|/|H₀| 0.2 within 0.12 s); at 40 sweeps 0.8 left the energy
 /// within 6.2e-4 over 2 s and the widest gap at 2.2e-4, 0.95 at 5.9e-4 and 8.1e-4.
 const PIN_STABILISE: f64 = 0.8;
-/// γ: how much of last step's λ and k a persisting contact starts from. The authors use 0.99;
-/// on `scenes/bench/stack_1000.lagra` 0.9 left its fastest point at 4.5e-3 / 4.7e-3 (dt 0.005
-/// / 0.01) against 4.8e-3 / 9.9e-3 with 0.99: a stiffness that stays high makes the sweeps
-/// carry load down a ten-block tower more slowly.
+/// γ: how much of last step's k a persisting contact starts from, and of a pin's λ (with α).
+/// The authors use 0.99; on `scenes/bench/stack_1000.lagra` 0.9 left its fastest point at
+/// 4.5e-3 / 4.7e-3 (dt 0.005 / 0.01) against 4.8e-3 / 9.9e-3 with 0.99: a stiffness that stays
+/// high makes the sweeps carry load down a ten-block tower more slowly.
 const DECAY: f64 = 0.9;
-/// The stiffness a new contact row starts at, and its cap, in units of its lighter body's m/dt².
-const STIFFNESS_START: f64 = 1.0;
+/// The share of last step's λ a persisting contact starts from. The authors carry αγ (0.855
+/// here); on the stack (with `STIFFNESS_START` at 10, bottom-up sweeps, 20 sweeps a step) the
+/// fastest point at 3.5–4 s was 1.8e-4 / 1.8e-4 / 4.6e-4 at dt 0.005 / 0.01 / 0.02 with 0.5,
+/// against 2.1e-2 and 8.8e-2 (dt 0.005, 0.02: `resting` FAILs) with 0.95: a λ carried whole
+/// keeps the push that stopped a block last step, and the sweeps do not undo it in time. 0.3
+/// and 0.7 rested less quietly at some dt (up to 1.9e-3 and 1.8e-3).
+const CARRY: f64 = 0.5;
+/// The stiffness a new contact row starts at (and never falls below), and its cap, in units of
+/// its lighter body's m/dt². The ramp hardly moves it (the sweeps leave overlaps of ~1e-5
+/// against a margin of 1e-2), so the start is the stiffness: at 1, the stack's dual steps
+/// (λ += kC) rebuilt a tower's load so slowly that it rested at 2.1e-3 (dt 0.005) and FAILed
+/// `resting` at dt 0.01 and 0.02 (9.5e-3, 1.6e-2); 6–25 rested (6.8e-4 to 2.9e-3 with the old
+/// carry); 40 and 100 overshot (λ rings: 2.5e-2 and 5.3e-2, FAIL).
+const STIFFNESS_START: f64 = 10.0;
 const STIFFNESS_MOST: f64 = 1e3;
+/// A pin's starting stiffness (its λ is carried by αγ): with a contact's start and carry (10,
+/// 0.5) `scenes/hinged_chain.lagra` lost 5.5e-3 of its energy in 0.2 s (its claim is 5e-3);
+/// with 1 and αγ it keeps within 6.1e-4 over 2 s.
+const PIN_STIFFNESS_START: f64 = 1.0;
 /// β: the ramp, in units of m/dt² per contact margin of error.
 const RAMP: f64 = 1.0;
 
@@ -176,6 +193,10 @@ impl Contact {
     /// units of the lighter body's m/dt²).
     fn rows(a: Option<usize>, b: usize, bound: Bound, point: V, bodies: &[Body], margin: f64) -> Contact {
         let unit = a.map_or(bodies[b].mass, |a| bodies[a].mass.min(bodies[b].mass));
+        let start = match bound {
+            Bound::Coulomb(_) => STIFFNESS_START,
+            Bound::Pin(_) => PIN_STIFFNESS_START,
+        };
         Contact {
             a,
             b,
@@ -183,17 +204,22 @@ impl Contact {
             offset: [0.0; 3],
             bound,
             lambda: [0.0; 3],
-            stiffness: [STIFFNESS_START * unit; 3],
-            start: STIFFNESS_START * unit,
+            stiffness: [start * unit; 3],
+            start: start * unit,
             ramp: RAMP * unit / margin,
             most: STIFFNESS_MOST * unit,
             point,
         }
     }
 
-    /// Starts from last step's λ and k: λ decayed by αγ, k by γ (within its start and cap).
+    /// Starts from last step's λ and k: a contact's λ scaled by its carry, a pin's decayed by
+    /// αγ; k decayed by γ (within its start and cap).
     fn warm_from(&mut self, lambda: &[f64; 3], stiffness: &[f64; 3]) {
-        self.lambda = lambda.map(|l| l * STABILISE * DECAY);
+        let carry = match self.bound {
+            Bound::Coulomb(_) => CARRY,
+            Bound::Pin(_) => STABILISE * DECAY,
+        };
+        self.lambda = lambda.map(|l| l * carry);
         self.stiffness = stiffness.map(|k| (k * DECAY).clamp(self.start, self.most));
     }
 
@@ -398,9 +424,11 @@ struct Rows {
 }
 
 impl Rows {
-    /// Greedy colouring in body order (fixed by the state, so the same for any thread count):
-    /// each body in contact takes the first colour none of its neighbours has; a body in no
-    /// contact takes none.
+    /// Colours by level: a body's level is its distance in contacts from the world (the floor,
+    /// or a pin to it), and each level is coloured greedily in body order among its own bodies,
+    /// so the colours run from the ground up. Fixed by the state, so the same for any thread
+    /// count. A body in no contact takes none; a group touching nothing fixed counts its levels
+    /// from its lowest-numbered body.
     fn of(contacts: &[Contact], n: usize) -> Rows {
         let mut of = vec![vec![]; n];
         for (j, c) in contacts.iter().enumerate() {
@@ -409,19 +437,52 @@ impl Rows {
                 of[a].push((j, false));
             }
         }
+        let other = |_: usize, (j, as_b): (usize, bool)| if as_b { contacts[j].a } else { Some(contacts[j].b) };
+        let mut level = vec![usize::MAX; n];
+        let mut queue = std::collections::VecDeque::new();
+        for i in 0..n {
+            if of[i].iter().any(|&r| other(i, r).is_none()) {
+                level[i] = 0;
+                queue.push_back(i);
+            }
+        }
+        let mut seeds = 0..n;
+        loop {
+            while let Some(i) = queue.pop_front() {
+                for &r in &of[i] {
+                    if let Some(k) = other(i, r).filter(|&k| level[k] == usize::MAX) {
+                        level[k] = level[i] + 1;
+                        queue.push_back(k);
+                    }
+                }
+            }
+            match seeds.find(|&i| level[i] == usize::MAX && !of[i].is_empty()) {
+                Some(i) => {
+                    level[i] = 0;
+                    queue.push_back(i);
+                }
+                None => break,
+            }
+        }
+        let mut order: Vec<usize> = (0..n).filter(|&i| !of[i].is_empty()).collect();
+        order.sort_by_key(|&i| (level[i], i));
         let mut colour: Vec<usize> = vec![usize::MAX; n];
         let mut colours: Vec<Vec<usize>> = vec![];
         let mut taken: Vec<bool> = vec![];
-        for i in (0..n).filter(|&i| !of[i].is_empty()) {
+        let mut first = 0;
+        let mut current = 0;
+        for i in order {
+            if level[i] != current {
+                (current, first) = (level[i], colours.len());
+            }
             taken.clear();
             taken.resize(colours.len() + 1, false);
-            for &(j, as_b) in &of[i] {
-                let other = if as_b { contacts[j].a } else { Some(contacts[j].b) };
-                if let Some(k) = other.filter(|&k| colour[k] != usize::MAX) {
+            for &r in &of[i] {
+                if let Some(k) = other(i, r).filter(|&k| colour[k] != usize::MAX && colour[k] >= first) {
                     taken[colour[k]] = true;
                 }
             }
-            let free = taken.iter().position(|t| !t).expect("one more colour than are taken");
+            let free = first + taken[first..].iter().position(|t| !t).expect("one more colour than are taken");
             if free == colours.len() {
                 colours.push(vec![]);
             }

@@ -141,3 +141,31 @@ fn a_hinged_brick_swings_with_the_pendulum_period() {
     let measured = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64 * 2.0;
     assert!((measured / period - 1.0).abs() < 0.01, "period {measured} against {period}");
 }
+
+/// A touch between a and b (a: none is the floor) at a point, pushing along y.
+fn touch(a: Option<usize>, b: usize) -> Touch {
+    Touch { a, b, point: V::zeros(), normal: V::y(), depth: 0.0, friction: 0.5 }
+}
+
+/// A tower on the floor (0 under 1 under 2 under 3), a block on the floor beside 0 and touching
+/// it (4), two blocks touching each other in the air (5, 6), one touching nothing: the colours
+/// climb the tower from the floor, two bodies that touch on one level take two colours, and a
+/// group touching nothing fixed counts its levels from its lowest-numbered body.
+#[test]
+fn the_colours_climb_a_tower_from_the_floor() {
+    let pose = Pose { centre: V::zeros(), rotation: Matrix3::identity() };
+    let bodies = vec![Body { moved: Move::zeros(), target: Move::zeros(), mass: 1.0, inertia: None }; 8];
+    let touches = [
+        touch(Some(1), 2),
+        touch(Some(5), 6),
+        touch(None, 0),
+        touch(Some(2), 3),
+        touch(Some(0), 1),
+        touch(Some(0), 4),
+        touch(None, 4),
+    ];
+    let contacts: Vec<Contact> = touches.iter().map(|t| Contact::new(t, &[pose; 8], &bodies, 0.01)).collect();
+    let rows = Rows::of(&contacts, 8);
+    assert_eq!(rows.colours, vec![vec![0, 5], vec![4], vec![1, 6], vec![2], vec![3]]);
+    assert!(rows.of[7].is_empty());
+}
