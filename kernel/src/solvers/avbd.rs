@@ -112,13 +112,18 @@ struct Body {
     inertia: Option<Matrix3<f64>>,
 }
 
-/// One contact, or one pin of a joint: its bodies (a: none is the floor, or the world), per row
-/// its Jacobians on a and b, each row's target, what bounds the rows, each row's λ and k, and
-/// where it was found (for the next step's warm start).
+/// One contact, or one pin of a joint: its bodies (a: none is the floor, or the world), its rows'
+/// directions and each body's arm to the point (row k's Jacobian on b is (d_k, r_b × d_k), on a
+/// the negative of a's), each row's target, what bounds the rows, each row's λ and k, and where it
+/// was found (for the next step's warm start).
 struct Contact {
     a: Option<usize>,
     b: usize,
-    jacobians: [[Move; 3]; 2],
+    /// A contact's normal and two tangents; a pin's x, y, z.
+    dirs: [V; 3],
+    /// From a's centre and from b's to the point, as each was found; nothing for a body that does
+    /// not turn (a point mass, the floor, the world).
+    arms: [V; 2],
     /// What each row's error is measured from: the normal's stabilised overlap (the tangents'
     /// nothing), or a pin's gap along x, y, z.
     offset: [f64; 3],
@@ -150,18 +155,13 @@ impl Contact {
     fn new(t: &Touch, start: &[Pose], bodies: &[Body], margin: f64) -> Contact {
         let n = t.normal;
         let t1 = if n.x.abs() < 0.9 { n.cross(&V::x()) } else { n.cross(&V::y()) }.normalize();
-        let dirs = [n, t1, n.cross(&t1)];
-        let row = |i: Option<usize>, sign: f64| {
-            dirs.map(|d| {
-                let turn = match i.filter(|&i| bodies[i].inertia.is_some()) {
-                    Some(i) => (t.point - start[i].centre).cross(&d),
-                    None => V::zeros(),
-                };
-                Move::new(d.x, d.y, d.z, turn.x, turn.y, turn.z) * sign
-            })
+        let arm = |i: Option<usize>| match i.filter(|&i| bodies[i].inertia.is_some()) {
+            Some(i) => t.point - start[i].centre,
+            None => V::zeros(),
         };
         Contact {
-            jacobians: [row(t.a, -1.0), row(Some(t.b), 1.0)],
+            dirs: [n, t1, n.cross(&t1)],
+            arms: [arm(t.a), arm(Some(t.b))],
             offset: [(1.0 - STABILISE) * t.depth.max(0.0) + t.depth.min(0.0), 0.0, 0.0],
             ..Contact::rows(t.a, t.b, Bound::Coulomb(t.friction), t.point, bodies, margin)
         }
@@ -175,15 +175,10 @@ impl Contact {
         let (arm_b, arm_a) = (seen(p.b, &p.on_b), p.a.map(|a| seen(a, &p.on_a)));
         let at_b = start[p.b].centre + arm_b;
         let at_a = p.a.zip(arm_a).map_or(V::from(p.on_a), |(a, arm)| start[a].centre + arm);
-        let row = |arm: V, sign: f64| {
-            [V::x(), V::y(), V::z()].map(|d| {
-                let turn = arm.cross(&d);
-                Move::new(d.x, d.y, d.z, turn.x, turn.y, turn.z) * sign
-            })
-        };
         let gap = at_b - at_a;
         Contact {
-            jacobians: [arm_a.map_or([Move::zeros(); 3], |arm| row(arm, -1.0)), row(arm_b, 1.0)],
+            dirs: [V::x(), V::y(), V::z()],
+            arms: [arm_a.unwrap_or_default(), arm_b],
             offset: (-gap * (1.0 - PIN_STABILISE)).into(),
             ..Contact::rows(p.a, p.b, Bound::Pin(j), at_b, bodies, margin)
         }
@@ -200,7 +195,8 @@ impl Contact {
         Contact {
             a,
             b,
-            jacobians: [[Move::zeros(); 3]; 2],
+            dirs: [V::zeros(); 3],
+            arms: [V::zeros(); 2],
             offset: [0.0; 3],
             bound,
             lambda: [0.0; 3],
@@ -223,11 +219,15 @@ impl Contact {
         self.stiffness = stiffness.map(|k| (k * DECAY).clamp(self.start, self.most));
     }
 
-    /// The three rows' errors at these moves.
+    /// The three rows' errors at these moves: each direction's share of how far b's point moved
+    /// from a's (J·Δ = d·(Δx + Δθ × r): the point's move, to first order).
     fn errors(&self, bodies: &[Body]) -> [f64; 3] {
-        let on_a = |k: usize| self.a.map_or(0.0, |a| self.jacobians[0][k].dot(&bodies[a].moved));
-        let c = |k: usize| on_a(k) + self.jacobians[1][k].dot(&bodies[self.b].moved);
-        [0, 1, 2].map(|k| c(k) - self.offset[k])
+        let moved = |m: &Move, arm: &V| m.fixed_rows::<3>(0) + m.fixed_rows::<3>(3).cross(arm);
+        let mut apart = moved(&bodies[self.b].moved, &self.arms[1]);
+        if let Some(a) = self.a {
+            apart -= moved(&bodies[a].moved, &self.arms[0]);
+        }
+        [0, 1, 2].map(|k| self.dirs[k].dot(&apart) - self.offset[k])
     }
 
     /// The rows' forces at errors `c` (k C + λ: the normal pushes only, friction stays inside
@@ -242,8 +242,9 @@ impl Contact {
         };
         let normal = (self.stiffness[0] * c[0] + self.lambda[0]).min(0.0);
         let t = [1, 2].map(|k| self.stiffness[k] * c[k] + self.lambda[k]);
-        let (size, most) = ((t[0] * t[0] + t[1] * t[1]).sqrt(), friction * normal.abs());
-        let share = if size > most { most / size } else { 1.0 };
+        let (size, most) = (t[0] * t[0] + t[1] * t[1], friction * normal.abs());
+        // squares compared, so that a sticking row (most of a resting stack's) takes no root
+        let share = if size > most * most { most / size.sqrt() } else { 1.0 };
         let k = self.stiffness;
         ([normal, t[0] * share, t[1] * share], [k[0], k[1] * share, k[2] * share])
     }
@@ -536,14 +537,28 @@ fn descend(b: &Body, bodies: &[Body], contacts: &[Contact], rows: &[(usize, bool
     if b.inertia.is_none() {
         force.fixed_rows_mut::<3>(3).fill(0.0);
     }
+    // with J = ±(I; [r]×) d per row, the rows sum to ±(F; r × F), F = Σ f d, in the force and to
+    // (I; [r]×) K (I, [r]×ᵀ), K = Σ k d dᵀ, in the Hessian
     for &(j, as_b) in rows {
         let c = &contacts[j];
         let (f, k) = c.forces(&c.errors(bodies));
-        let jacobians = &c.jacobians[as_b as usize];
-        for r in 0..3 {
-            force -= jacobians[r] * f[r];
-            hessian.ger(k[r], &jacobians[r], &jacobians[r], 1.0);
-        }
+        let arm = c.arms[as_b as usize];
+        let pushed = c.dirs[0] * f[0] + c.dirs[1] * f[1] + c.dirs[2] * f[2];
+        let sign = if as_b { 1.0 } else { -1.0 };
+        force.fixed_rows_mut::<3>(0).axpy(-sign, &pushed, 1.0);
+        force.fixed_rows_mut::<3>(3).axpy(-sign, &arm.cross(&pushed), 1.0);
+        let stiff = c.dirs[0] * c.dirs[0].transpose() * k[0]
+            + c.dirs[1] * c.dirs[1].transpose() * k[1]
+            + c.dirs[2] * c.dirs[2].transpose() * k[2];
+        let turned = arm.cross_matrix() * stiff;
+        let mut block = hessian.fixed_view_mut::<3, 3>(0, 0);
+        block += stiff;
+        let mut block = hessian.fixed_view_mut::<3, 3>(3, 0);
+        block += turned;
+        let mut block = hessian.fixed_view_mut::<3, 3>(0, 3);
+        block += turned.transpose();
+        let mut block = hessian.fixed_view_mut::<3, 3>(3, 3);
+        block += turned * arm.cross_matrix().transpose();
     }
     match hessian.cholesky() {
         Some(h) => b.moved + h.solve(&force),
