@@ -94,7 +94,7 @@ impl Solids {
     }
 
     /// Every contact at these poses, in an order fixed by the state: the floor's, body by body,
-    /// then each near pair's, pairs in sweep order.
+    /// then each near pair's, pairs in index order.
     pub fn touching(&self, poses: &[Pose]) -> Vec<Touch> {
         let mut out = vec![];
         if let Some(floor) = self.floor {
@@ -115,30 +115,74 @@ impl Solids {
         out
     }
 
-    /// Pairs of solids whose bounding balls (grown by the margin) meet, by a sweep along x.
+    /// Pairs of solids whose bounding balls (grown by the margin) meet, in order. The solids are
+    /// binned into cells at least a widest ball's diameter across, so a pair's two cells touch;
+    /// the cells grow so that there are at most about four a solid (a far outlier makes them
+    /// large: slower, never wrong). A sweep along one axis, as before, met a hundred candidates a
+    /// block on the 1,000-block stack (ten towers stand at each x), a quarter of a step at five
+    /// sweeps.
     fn near(&self, poses: &[Pose]) -> Vec<(usize, usize)> {
-        let mut order: Vec<(usize, f64)> = self
+        let solids: Vec<(usize, f64)> = self
             .solids
             .iter()
             .enumerate()
             .filter_map(|(i, s)| s.map(|s| (i, s.extent.reach() + self.margin)))
             .collect();
-        order.sort_by(|a, b| (poses[a.0].centre.x - a.1).total_cmp(&(poses[b.0].centre.x - b.1)).then(a.0.cmp(&b.0)));
+        let (mut lo, mut hi) = (V::repeat(f64::INFINITY), V::repeat(f64::NEG_INFINITY));
+        for &(i, _) in &solids {
+            (lo, hi) = (lo.inf(&poses[i].centre), hi.sup(&poses[i].centre));
+        }
+        let widest = 2.0 * solids.iter().map(|s| s.1).fold(0.0, f64::max);
+        let span = (hi - lo).map(|s| s.max(widest));
+        let mut cell = widest.max((span.x * span.y * span.z / (4.0 * solids.len().max(1) as f64)).cbrt());
+        // a non-finite centre or span lands in cell 0 (float-to-int casts saturate); a box flat
+        // along an axis, or solids of no size, widen the cells until they are few enough
+        let cells = |cell: f64| span.map(|s| ((s / cell) as usize).min(1 << 20) + 1);
+        while cells(cell).iter().fold(1usize, |n, d| n.saturating_mul(*d)) > 8 * solids.len() + 8 {
+            cell = if cell > 0.0 { 2.0 * cell } else { f64::MIN_POSITIVE };
+        }
+        let dims = cells(cell);
+        let at = |c: &V| {
+            let k = ((c - lo) / cell).map(|x| x as usize);
+            [k.x.min(dims.x - 1), k.y.min(dims.y - 1), k.z.min(dims.z - 1)]
+        };
+        let flat = |k: [usize; 3]| (k[0] * dims.y + k[1]) * dims.z + k[2];
+        // counting sort: the solids of cell c are held[first[c]..first[c + 1]]
+        let mut first = vec![0usize; dims.x * dims.y * dims.z + 1];
+        for &(i, _) in &solids {
+            first[flat(at(&poses[i].centre)) + 1] += 1;
+        }
+        for c in 1..first.len() {
+            first[c] += first[c - 1];
+        }
+        let mut held = vec![(0usize, 0.0); solids.len()];
+        let mut fill = first.clone();
+        for &(i, r) in &solids {
+            let c = flat(at(&poses[i].centre));
+            held[fill[c]] = (i, r);
+            fill[c] += 1;
+        }
         let mut pairs = vec![];
-        for (n, &(i, ri)) in order.iter().enumerate() {
-            let right = poses[i].centre.x + ri;
-            for &(j, rj) in &order[n + 1..] {
-                if poses[j].centre.x - rj > right {
-                    break;
-                }
-                let d = poses[j].centre - poses[i].centre;
-                let (a, b) = (i.min(j), i.max(j));
-                let pinned = self.pins.iter().any(|p| p.a == Some(a) && p.b == b || p.a == Some(b) && p.b == a);
-                if d.iter().all(|c| c.abs() <= ri + rj) && d.norm() <= ri + rj && !pinned {
-                    pairs.push((a, b));
+        for &(i, ri) in &solids {
+            let k = at(&poses[i].centre);
+            let around = |k: usize, d: usize| k.saturating_sub(1)..(k + 2).min(d);
+            for x in around(k[0], dims.x) {
+                for y in around(k[1], dims.y) {
+                    for z in around(k[2], dims.z) {
+                        let c = flat([x, y, z]);
+                        for &(j, rj) in held[first[c]..first[c + 1]].iter().filter(|h| h.0 > i) {
+                            let d = poses[j].centre - poses[i].centre;
+                            let pinned =
+                                || self.pins.iter().any(|p| p.a == Some(i) && p.b == j || p.a == Some(j) && p.b == i);
+                            if d.iter().all(|c| c.abs() <= ri + rj) && d.norm() <= ri + rj && !pinned() {
+                                pairs.push((i, j));
+                            }
+                        }
+                    }
                 }
             }
         }
+        pairs.sort_unstable();
         pairs
     }
 }
@@ -358,6 +402,19 @@ mod tests {
         assert!(boxes((0, &poses[0], [0.5; 3]), (2, &poses[2], [0.5; 3]), 0.01).is_empty());
     }
 
+    /// A centre at NaN or infinity (a state the run is about to refuse) does not break the grid:
+    /// the finite neighbours still meet.
+    #[test]
+    fn a_non_finite_centre_leaves_the_grid_whole() {
+        let ball = Some(Solid { extent: Extent::Ball(0.5), friction: 0.5 });
+        let solids = Solids { solids: vec![ball; 4], floor: None, pins: vec![], margin: 0.01 };
+        for odd in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let poses =
+                [pose([0.0; 3], 0.0), pose([odd, 0.0, 0.0], 0.0), pose([0.9, 0.0, 0.0], 0.0), pose([5.0; 3], 0.0)];
+            assert_eq!(solids.near(&poses), vec![(0, 2)]);
+        }
+    }
+
     #[test]
     fn a_tilted_box_touches_the_floor_at_its_lowest_corner() {
         let p = Pose {
@@ -371,6 +428,45 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// The grid finds the pairs that testing every pair finds, in the same order: solids of
+        /// mixed sizes, point masses among them, one sometimes far off (which makes the cells
+        /// large) or flat along an axis with the others (which makes the span thin).
+        #[test]
+        fn the_grid_finds_every_near_pair(
+            bodies in proptest::collection::vec((proptest::array::uniform3(-4.0f64..4.0), 0.05f64..1.5, 0u8..3), 2..60),
+            outlier in proptest::option::of(1e3f64..1e9),
+            flat in proptest::bool::ANY,
+        ) {
+            let solids: Vec<Option<Solid>> = bodies
+                .iter()
+                .map(|&(_, size, kind)| match kind {
+                    0 => Some(Solid { extent: Extent::Ball(size), friction: 0.5 }),
+                    1 => Some(Solid { extent: Extent::Cuboid([size, 0.5 * size, 0.1]), friction: 0.5 }),
+                    _ => None,
+                })
+                .collect();
+            let mut poses: Vec<Pose> = bodies
+                .iter()
+                .map(|&(c, _, _)| pose([c[0], if flat { 0.0 } else { c[1] }, c[2]], c[2]))
+                .collect();
+            if let Some(far) = outlier {
+                poses[0].centre.x = far;
+            }
+            let solids = Solids { solids, floor: None, pins: vec![], margin: 0.01 };
+            let reach = |i: usize| solids.solids[i].map(|s| s.extent.reach() + solids.margin);
+            let mut every = vec![];
+            for i in 0..poses.len() {
+                for j in i + 1..poses.len() {
+                    if let (Some(ri), Some(rj)) = (reach(i), reach(j)) {
+                        if (poses[j].centre - poses[i].centre).norm() <= ri + rj {
+                            every.push((i, j));
+                        }
+                    }
+                }
+            }
+            proptest::prop_assert_eq!(solids.near(&poses), every);
+        }
+
         /// The floor's contacts do not depend on where along it a body stands or how it is
         /// turned about the vertical: the same depths, in some order.
         #[test]
