@@ -15,6 +15,8 @@
 use crate::rigid::Spin;
 use lagra_checker::model::{Extent, Floor, Model, Pin};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use rayon::prelude::*;
+use rayon::ThreadPool;
 
 type V = Vector3<f64>;
 
@@ -94,8 +96,9 @@ impl Solids {
     }
 
     /// Every contact at these poses, in an order fixed by the state: the floor's, body by body,
-    /// then each near pair's, pairs in index order.
-    pub fn touching(&self, poses: &[Pose]) -> Vec<Touch> {
+    /// then each near pair's, pairs in index order (the pairs on the pool's threads where there is
+    /// one, gathered in that order: the same contacts for any thread count).
+    pub fn touching(&self, poses: &[Pose], pool: Option<&ThreadPool>) -> Vec<Touch> {
         let mut out = vec![];
         if let Some(floor) = self.floor {
             for (i, (s, p)) in self.solids.iter().zip(poses).enumerate() {
@@ -105,13 +108,20 @@ impl Solids {
                 }
             }
         }
-        for (i, j) in self.near(poses) {
+        let pair = |&(i, j): &(usize, usize)| {
             let (si, sj) = (self.solids[i].expect("a solid"), self.solids[j].expect("a solid"));
             let mu = (si.friction * sj.friction).sqrt();
-            for (a, b, point, normal, depth) in between((i, si.extent), (j, sj.extent), poses, self.margin) {
-                out.push(Touch { a: Some(a), b, point, normal, depth, friction: mu });
-            }
-        }
+            let found = between((i, si.extent), (j, sj.extent), poses, self.margin).into_iter();
+            found
+                .map(|(a, b, point, normal, depth)| Touch { a: Some(a), b, point, normal, depth, friction: mu })
+                .collect()
+        };
+        let pairs = self.near(poses);
+        let found: Vec<Vec<Touch>> = match pool {
+            Some(pool) => pool.install(|| pairs.par_iter().map(pair).collect()),
+            None => pairs.iter().map(pair).collect(),
+        };
+        out.extend(found.into_iter().flatten());
         out
     }
 
@@ -164,6 +174,7 @@ impl Solids {
         }
         let mut pairs = vec![];
         for &(i, ri) in &solids {
+            let from = pairs.len();
             let k = at(&poses[i].centre);
             let around = |k: usize, d: usize| k.saturating_sub(1)..(k + 2).min(d);
             for x in around(k[0], dims.x) {
@@ -181,8 +192,8 @@ impl Solids {
                     }
                 }
             }
+            pairs[from..].sort_unstable();
         }
-        pairs.sort_unstable();
         pairs
     }
 }

@@ -63,7 +63,7 @@ fn apart(scene: &Scene) -> Result<(), Diagnostic> {
     let Some(solids) = Solids::of(&scene.model) else { return Ok(()) };
     // well above rounding, well below any overlap the solver would have to undo
     let tolerance = 1e-6 * solids.margin;
-    let touches = solids.touching(&solids.poses(&scene.x0, &scene.spin0));
+    let touches = solids.touching(&solids.poses(&scene.x0, &scene.spin0), None);
     let Some(t) = touches.into_iter().find(|t| t.depth > tolerance) else { return Ok(()) };
     let (at, depth) = (&scene.spans, t.depth);
     Err(match t.a {

@@ -281,7 +281,7 @@ impl Solver for Avbd {
         let margin = self.solids.margin.max(f64::MIN_POSITIVE);
         let mut contacts: Vec<Contact> = self
             .solids
-            .touching(&start)
+            .touching(&start, g.pool())
             .iter()
             .map(|t| {
                 let mut c = Contact::new(t, &start, &bodies, margin);

@@ -155,7 +155,8 @@ impl Solver for Impulses {
         let h = dt / self.substeps as f64;
         let slop = SLOP * self.solids.margin;
         let mut poses = self.solids.poses(&s.x, &s.spin);
-        let mut found: Vec<Found> = self.solids.touching(&poses).into_iter().map(|t| Found::new(t, &poses)).collect();
+        let mut found: Vec<Found> =
+            self.solids.touching(&poses, g.pool()).into_iter().map(|t| Found::new(t, &poses)).collect();
         // from the highest contact down: a stack's weight reaches the floor within one sweep
         found.sort_by(|a, b| b.touch.point.y.total_cmp(&a.touch.point.y));
         let mut rows: Vec<Row> = found.iter().map(Row::new).collect();
