@@ -6,13 +6,14 @@
 //! solved body by body: each body's six degrees of freedom take one Newton step against the
 //! inertial term and its contacts with the others held still, bodies of one colour (no contact
 //! between them) at once, the colours from the ground up (a body's level is its distance in
-//! contacts from the floor, so a sweep carries support up a tower in one pass). A contact is three rows (normal, two tangents), each a hard
-//! constraint C ≥ 0 (or C = 0 for sticking friction) held by an augmented Lagrangian: the force
-//! F = k C + λ, clamped (push only; friction inside Coulomb's disc μ|Fₙ|); after each sweep λ
-//! takes the force and, where the bound does not bind, the stiffness k ramps by β|C|, so the
-//! constraint stiffens only as far as it is violated. λ and k start from last step's contact of
-//! the same pair nearest the point (λ at half, k decayed by γ), so a resting stack starts each
-//! step with part of its weight already carried.
+//! contacts from the floor, so a sweep carries support up a tower in one pass). A contact is
+//! three rows (normal, two tangents), each a hard constraint C ≥ 0 (or C = 0 for sticking
+//! friction) held by an augmented Lagrangian: the force F = k C + λ, clamped (push only;
+//! friction inside Coulomb's disc μ|Fₙ|); after each sweep λ takes the force and, where the
+//! bound does not bind, the stiffness k ramps by β|C|, so the constraint stiffens only as far as
+//! it is violated. λ and k start from last step's contact of the same pair nearest the point
+//! (λ at half, k decayed by γ), so a resting stack starts each step with part of its weight
+//! already carried.
 //!
 //! A body's unknown is its move over the step, Δ = (Δx, Δθ): its centre's displacement and its
 //! turn as a rotation vector (the pose at the end is x₀ + Δx, exp(Δθ) q₀). A contact row is
@@ -438,11 +439,11 @@ impl Rows {
                 of[a].push((j, false));
             }
         }
-        let other = |_: usize, (j, as_b): (usize, bool)| if as_b { contacts[j].a } else { Some(contacts[j].b) };
+        let other = |(j, as_b): (usize, bool)| if as_b { contacts[j].a } else { Some(contacts[j].b) };
         let mut level = vec![usize::MAX; n];
         let mut queue = std::collections::VecDeque::new();
         for i in 0..n {
-            if of[i].iter().any(|&r| other(i, r).is_none()) {
+            if of[i].iter().any(|&r| other(r).is_none()) {
                 level[i] = 0;
                 queue.push_back(i);
             }
@@ -451,7 +452,7 @@ impl Rows {
         loop {
             while let Some(i) = queue.pop_front() {
                 for &r in &of[i] {
-                    if let Some(k) = other(i, r).filter(|&k| level[k] == usize::MAX) {
+                    if let Some(k) = other(r).filter(|&k| level[k] == usize::MAX) {
                         level[k] = level[i] + 1;
                         queue.push_back(k);
                     }
@@ -479,7 +480,7 @@ impl Rows {
             taken.clear();
             taken.resize(colours.len() + 1, false);
             for &r in &of[i] {
-                if let Some(k) = other(i, r).filter(|&k| colour[k] != usize::MAX && colour[k] >= first) {
+                if let Some(k) = other(r).filter(|&k| colour[k] != usize::MAX && colour[k] >= first) {
                     taken[colour[k]] = true;
                 }
             }
