@@ -169,3 +169,29 @@ fn the_colours_climb_a_tower_from_the_floor() {
     assert_eq!(rows.colours, vec![vec![0, 5], vec![4], vec![1, 6], vec![2], vec![3]]);
     assert!(rows.of[7].is_empty());
 }
+
+/// A box, a brick and a ball colliding in the air (`tests/end_to_end/contact.rs`'s scene) touch
+/// nothing fixed, so their contacts start soft and the pair's moves, taken one after the other,
+/// keep the momentum to 1%: at the stack's stiffness it ended 0.30 off (of 1.08).
+#[test]
+fn bodies_colliding_in_the_air_keep_their_momentum_to_a_percent() {
+    let scene = compile(
+        "scene s {
+           entity { shape: box, size: [1, 1, 1], mass: 1, position: [-1, 0, 0], velocity: [1, 0.1, 0], angular_velocity: [0, 0.5, 1] }
+           entity { shape: box, size: [1, 2, 0.5], mass: 2, position: [1, 0.3, 0.2], velocity: [-1, 0, 0.05], orientation: { axis: [1, 1, 0], angle: 0.4 } }
+           entity { shape: sphere, size: 0.4, mass: 0.5, position: [0, 2, 0], velocity: [0, -1, 0] }
+           solver { integrator: \"avbd\", dt: 0.002 }
+         }",
+    )
+    .unwrap();
+    let g = LagrangianGraph::with_threads(&scene.model, 1).unwrap();
+    let mut s = start(&scene);
+    let momentum = |s: &State| s.v.iter().zip(&g.masses).map(|(v, m)| V::from(*v) * *m).sum::<V>();
+    let before = momentum(&s);
+    let mut st = Stepper::new(scene.solver.integrator, scene.solver.settings, &g, &s).unwrap();
+    st.advance_to(&g, &mut s, 0.002, 1500).unwrap();
+    let moved: f64 = s.x.iter().zip(&scene.x0).map(|(x, x0)| (V::from(*x) - V::from(*x0)).norm()).sum();
+    assert!(moved > 1.0, "the bodies met and moved on: {moved}");
+    let lost = (momentum(&s) - before).norm();
+    assert!(lost < 0.01 * before.norm(), "momentum {before} -> {}: {lost}", momentum(&s));
+}
