@@ -39,8 +39,9 @@ use super::{Carried, Evaluated, Failure, Iterations, Solver};
 use crate::contact::{Pose, Solids, Touch};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
+use block::Block;
 use lagra_checker::model::Pin;
-use nalgebra::{Matrix3, Matrix6, Quaternion, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -235,14 +236,20 @@ impl Contact {
     }
 
     /// The three rows' errors at these moves: each direction's share of how far b's point moved
-    /// from a's (J·Δ = d·(Δx + Δθ × r): the point's move, to first order).
+    /// from a's (J·Δ = d·(Δx + Δθ × r): the point's move, to first order). Written out in
+    /// numbers: it is the sweeps' innermost work (a contact's errors are taken three times a
+    /// sweep), and nalgebra's 3-vectors spent most of it shuffling pairs of lanes.
+    #[inline(always)]
     fn errors(&self, bodies: &[Body]) -> [f64; 3] {
-        let moved = |m: &Move, arm: &V| m.fixed_rows::<3>(0) + m.fixed_rows::<3>(3).cross(arm);
-        let mut apart = moved(&bodies[self.b].moved, &self.arms[1]);
+        let mut apart = point_move(&bodies[self.b].moved, &self.arms[1]);
         if let Some(a) = self.a {
-            apart -= moved(&bodies[a].moved, &self.arms[0]);
+            let back = point_move(&bodies[a].moved, &self.arms[0]);
+            apart = [0, 1, 2].map(|i| apart[i] - back[i]);
         }
-        [0, 1, 2].map(|k| self.dirs[k].dot(&apart) - self.offset[k])
+        [0, 1, 2].map(|k| {
+            let d = &self.dirs[k];
+            d.x.mul_add(apart[0], d.y.mul_add(apart[1], d.z * apart[2])) - self.offset[k]
+        })
     }
 
     /// The rows' forces at errors `c` (k C + λ: the normal pushes only, friction stays inside
@@ -250,6 +257,7 @@ impl Contact {
     /// of its force the disc lets through; the normal's whole k even where it lets go, as the
     /// authors do, so that a body does not leap from a contact it is leaving into it and back
     /// (without it one box on the floor swings between free fall and a lift, step after step).
+    #[inline(always)]
     fn forces(&self, c: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
         let friction = match self.bound {
             Bound::Coulomb(mu) => mu,
@@ -271,7 +279,8 @@ impl Contact {
         let (f, _) = self.forces(&c);
         let free = match self.bound {
             Bound::Coulomb(mu) => {
-                let sticking = (f[1] * f[1] + f[2] * f[2]).sqrt() < mu * f[0].abs();
+                let most = mu * f[0];
+                let sticking = f[1] * f[1] + f[2] * f[2] < most * most;
                 [f[0] < 0.0, sticking, sticking]
             }
             Bound::Pin(_) => [true; 3],
@@ -511,6 +520,16 @@ impl Rows {
     }
 }
 
+/// How far a point at `arm` from a body's centre moves as the body moves by m: Δx + Δθ × r.
+#[inline]
+fn point_move(m: &Move, r: &V) -> [f64; 3] {
+    [
+        m[0] + m[4].mul_add(r.z, -m[5] * r.y),
+        m[1] + m[5].mul_add(r.x, -m[3] * r.z),
+        m[2] + m[3].mul_add(r.y, -m[4] * r.x),
+    ]
+}
+
 /// `sweeps` rounds of block descent, colour by colour, each followed by the dual step; returns
 /// the overlap left beyond the target after the last.
 fn sweep(bodies: &mut [Body], contacts: &mut [Contact], rows: &Rows, sweeps: u32, parallel: bool) -> f64 {
@@ -545,43 +564,21 @@ fn spread<T: Send + Sync, R: Send>(
 /// ½‖Δ − Δ̃‖²_M/dt² plus each of its contacts' rows, F J into the force and k J Jᵀ into the
 /// Hessian (a point mass keeps its turn at nothing).
 fn descend(b: &Body, bodies: &[Body], contacts: &[Contact], rows: &[(usize, bool)]) -> Move {
-    let mut hessian = Matrix6::from_diagonal_element(b.mass);
-    match b.inertia {
-        Some(inertia) => hessian.fixed_view_mut::<3, 3>(3, 3).copy_from(&inertia),
-        None => hessian.fixed_view_mut::<3, 3>(3, 3).fill_with_identity(),
-    }
-    let mut force = hessian * (b.target - b.moved);
-    if b.inertia.is_none() {
-        force.fixed_rows_mut::<3>(3).fill(0.0);
-    }
-    // with J = ±(I; [r]×) d per row, the rows sum to ±(F; r × F), F = Σ f d, in the force and to
-    // (I; [r]×) K (I, [r]×ᵀ), K = Σ k d dᵀ, in the Hessian
+    let mut block = Block::inertial(b.mass, b.inertia.as_ref(), &(b.target - b.moved));
+    // row n's Jacobian on b is (d_n, r × d_n), on a its negative: the sign goes into the force
+    // only, k J Jᵀ being the same either way
     for &(j, as_b) in rows {
         let c = &contacts[j];
         let (f, k) = c.forces(&c.errors(bodies));
-        let arm = c.arms[as_b as usize];
-        let pushed = c.dirs[0] * f[0] + c.dirs[1] * f[1] + c.dirs[2] * f[2];
         let sign = if as_b { 1.0 } else { -1.0 };
-        force.fixed_rows_mut::<3>(0).axpy(-sign, &pushed, 1.0);
-        force.fixed_rows_mut::<3>(3).axpy(-sign, &arm.cross(&pushed), 1.0);
-        let stiff = c.dirs[0] * c.dirs[0].transpose() * k[0]
-            + c.dirs[1] * c.dirs[1].transpose() * k[1]
-            + c.dirs[2] * c.dirs[2].transpose() * k[2];
-        let turned = arm.cross_matrix() * stiff;
-        let mut block = hessian.fixed_view_mut::<3, 3>(0, 0);
-        block += stiff;
-        let mut block = hessian.fixed_view_mut::<3, 3>(3, 0);
-        block += turned;
-        let mut block = hessian.fixed_view_mut::<3, 3>(0, 3);
-        block += turned.transpose();
-        let mut block = hessian.fixed_view_mut::<3, 3>(3, 3);
-        block += turned * arm.cross_matrix().transpose();
+        block.add_rows(&c.dirs, &c.arms[as_b as usize], k, f.map(|f| sign * f));
     }
-    match hessian.cholesky() {
-        Some(h) => b.moved + h.solve(&force),
+    match block.solve() {
+        Some(step) => b.moved + step,
         None => b.moved,
     }
 }
 
+mod block;
 #[cfg(test)]
 mod tests;

@@ -1,6 +1,7 @@
 use super::*;
 use crate::setup::{compile, start};
 use crate::solvers::Stepper;
+use nalgebra::Matrix6;
 use proptest::prelude::*;
 
 /// A body's share of the energy, as `descend` sees it: the inertial term and each row's
