@@ -6,7 +6,10 @@
 //! solved body by body: each body's six degrees of freedom take one Newton step against the
 //! inertial term and its contacts with the others held still, bodies of one colour (no contact
 //! between them) at once, the colours from the ground up (a body's level is its distance in
-//! contacts from the floor, so a sweep carries support up a tower in one pass). A contact is
+//! contacts from the floor, so a sweep carries support up a tower in one pass); on a pool of
+//! threads, where the bodies fall into islands (joined by contacts and pins, not by the floor)
+//! enough to share out, an island at a time on each thread (`islands.rs`), with the same bits.
+//! A contact is
 //! three rows (normal, two tangents), each a hard constraint C ≥ 0 (or C = 0 for sticking
 //! friction) held by an augmented Lagrangian: the force F = k C + λ, clamped (push only;
 //! friction inside Coulomb's disc μ|Fₙ|); after each sweep λ takes the force and, where the
@@ -40,6 +43,7 @@ use crate::contact::{Pose, Solids, Touch};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
 use block::Block;
+use islands::Island;
 use lagra_checker::model::Pin;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
@@ -302,36 +306,31 @@ impl Solver for Avbd {
     fn step(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64) -> Result<(), Failure> {
         let start = self.solids.poses(&s.x, &s.spin);
         let mut bodies = self.bodies(g, s, &start, dt);
-        let margin = self.solids.margin.max(f64::MIN_POSITIVE);
         let found = self.solids.touching(&start, g.pool());
-        let mut contacts: Vec<Contact> = found.iter().map(|t| Contact::new(t, &start, &bodies, margin)).collect();
-        for (j, p) in self.solids.pins.iter().enumerate() {
-            let mut c = Contact::pin(j, p, &start, &bodies, margin);
-            if let Some((_, lambda, stiffness)) = self.warm.get(&pin_key(j)).and_then(|w| w.first()) {
-                c.warm_from(lambda, stiffness);
+        // on a pool, the islands a task each where they share out over its threads (nothing to
+        // wait for between colours); else the whole at once, each colour spread over the pool
+        // (on one thread the whole too: taking the islands apart cost 10% of the stack's step)
+        let islands = g.pool().map(|pool| (pool, Island::all(&found, &self.solids.pins, bodies.len())));
+        let solved: Vec<Solved> = match islands {
+            Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
+                pool.install(|| islands.par_iter().map(|i| self.solve(i, &bodies, &start, false)).collect())
             }
-            contacts.push(c);
-        }
-        let rows = Rows::of(&contacts, bodies.len());
-        for c in contacts.iter_mut().filter(|c| matches!(c.bound, Bound::Coulomb(_))) {
-            if c.a.is_some_and(|a| !rows.grounded[a] && !rows.grounded[c.b]) {
-                c.soften();
+            _ => {
+                let whole = Island { bodies: (0..bodies.len()).collect(), touches: found, pins: self.pins() };
+                match g.pool() {
+                    Some(pool) => vec![pool.install(|| self.solve(&whole, &bodies, &start, true))],
+                    None => vec![self.solve(&whole, &bodies, &start, false)],
+                }
             }
-            self.start_warm(c);
-        }
-        // a body in no contact makes its inertial move: exact in one Newton step, not swept
-        for (b, of) in bodies.iter_mut().zip(&rows.of) {
-            if of.is_empty() {
-                b.moved = b.target;
-            }
-        }
-        // the sweeps run inside the pool, so that its threads pass from one colour to the next
-        // without sleeping between (called from outside for each colour, two threads were
-        // slower than one)
-        let residual = match g.pool() {
-            Some(pool) => pool.install(|| sweep(&mut bodies, &mut contacts, &rows, self.sweeps, true)),
-            None => sweep(&mut bodies, &mut contacts, &rows, self.sweeps, false),
         };
+        // a body in no contact makes its inertial move: exact in one Newton step, not swept
+        for b in &mut bodies {
+            b.moved = b.target;
+        }
+        for (i, m) in solved.iter().flat_map(|s| &s.moves) {
+            bodies[*i].moved = *m;
+        }
+        let residual = solved.iter().fold(0.0, |r: f64, s| r.max(s.residual));
         self.iterations.record(self.sweeps, residual);
         for ((b, p), (x, v)) in bodies.iter().zip(&start).zip(s.x.iter_mut().zip(s.v.iter_mut())) {
             let shift = b.moved.fixed_rows::<3>(0).into_owned();
@@ -348,7 +347,7 @@ impl Solver for Avbd {
             *spin = [q.w, q.i, q.j, q.k, pi.x, pi.y, pi.z];
         }
         self.at.potential = g.forces(s, &mut self.at.f)?;
-        self.keep_warm(&contacts, &bodies, &start);
+        self.keep_warm(solved.iter().flat_map(|s| &s.contacts), &bodies, &start);
         Ok(())
     }
 
@@ -385,7 +384,66 @@ impl Solver for Avbd {
     }
 }
 
+/// An island swept: its bodies' moves (by their index in the state), its contacts (their bodies
+/// numbered as in the state) with the λ and k they ended at, and what its last sweep left.
+struct Solved {
+    moves: Vec<(usize, Move)>,
+    contacts: Vec<Contact>,
+    residual: f64,
+}
+
+/// Whether `threads` threads have islands enough to take one at a time: at least one each, and
+/// the largest no more than a thread's share of the bodies in islands.
+fn shares(islands: &[Island], threads: usize) -> bool {
+    let largest = islands.iter().map(|i| i.bodies.len()).max().unwrap_or(0);
+    let held: usize = islands.iter().map(|i| i.bodies.len()).sum();
+    islands.len() >= threads && largest * threads <= held
+}
+
 impl Avbd {
+    /// One island's step: its contacts' rows at the step's start (warm-started from last step's
+    /// by their pair in the state), its colours, its sweeps (each colour spread over the current
+    /// pool if `parallel`). An island's levels and greedy colours are decided within it, so its
+    /// bodies descend in the order they take in a sweep over all: the same bits whether the
+    /// bodies are swept island by island or all at once.
+    fn solve(&self, island: &Island, all: &[Body], start: &[Pose], parallel: bool) -> Solved {
+        let margin = self.solids.margin.max(f64::MIN_POSITIVE);
+        let poses: Vec<Pose> = island.bodies.iter().map(|&i| start[i]).collect();
+        let mut bodies: Vec<Body> = island.bodies.iter().map(|&i| all[i]).collect();
+        let mut contacts: Vec<Contact> =
+            island.touches.iter().map(|t| Contact::new(t, &poses, &bodies, margin)).collect();
+        for (j, p) in &island.pins {
+            let mut c = Contact::pin(*j, p, &poses, &bodies, margin);
+            if let Some((_, lambda, stiffness)) = self.warm.get(&pin_key(*j)).and_then(|w| w.first()) {
+                c.warm_from(lambda, stiffness);
+            }
+            contacts.push(c);
+        }
+        let rows = Rows::of(&contacts, bodies.len());
+        for c in contacts.iter_mut().filter(|c| matches!(c.bound, Bound::Coulomb(_))) {
+            if c.a.is_some_and(|a| !rows.grounded[a] && !rows.grounded[c.b]) {
+                c.soften();
+            }
+            self.start_warm(c, (c.a.map_or(usize::MAX, |a| island.bodies[a]), island.bodies[c.b]));
+        }
+        for (b, of) in bodies.iter_mut().zip(&rows.of) {
+            if of.is_empty() {
+                b.moved = b.target;
+            }
+        }
+        let residual = sweep(&mut bodies, &mut contacts, &rows, self.sweeps, parallel);
+        for c in &mut contacts {
+            (c.a, c.b) = (c.a.map(|a| island.bodies[a]), island.bodies[c.b]);
+        }
+        let moves = island.bodies.iter().zip(&bodies).map(|(&i, b)| (i, b.moved)).collect();
+        Solved { moves, contacts, residual }
+    }
+
+    /// The pins with their indices, for a sweep over all bodies at once.
+    fn pins(&self) -> Vec<(usize, Pin)> {
+        self.solids.pins.iter().copied().enumerate().collect()
+    }
+
     /// Each body's inertial move, y − x₀ = dt v₀ + dt² F/m (a rigid body's turn dt ω₀), and
     /// where the sweeps start it: dt v₀, dt ω₀ (a resting body's move is nothing).
     fn bodies(&self, g: &LagrangianGraph, s: &State, start: &[Pose], dt: f64) -> Vec<Body> {
@@ -412,11 +470,12 @@ impl Avbd {
             .collect()
     }
 
-    /// A new contact starts from last step's contact of the same pair nearest its point (within
-    /// twice the margin), its λ decayed by αγ and its k by γ.
-    fn start_warm(&self, c: &mut Contact) {
+    /// A new contact starts from last step's contact of the same pair (a, b in the state's
+    /// numbering, a none: the floor) nearest its point (within twice the margin), its λ and k
+    /// carried as `warm_from` says.
+    fn start_warm(&self, c: &mut Contact, pair: (usize, usize)) {
         let reach = 4.0 * self.solids.margin * self.solids.margin;
-        let Some(old) = self.warm.get(&(c.a.unwrap_or(usize::MAX), c.b)) else { return };
+        let Some(old) = self.warm.get(&pair) else { return };
         let near = old.iter().map(|w| ((w.0 - c.point).norm_squared(), w)).min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((_, (_, lambda, stiffness))) = near.filter(|n| n.0 <= reach) {
             c.warm_from(lambda, stiffness);
@@ -425,7 +484,7 @@ impl Avbd {
 
     /// Each contact's λ and k, at its point carried by b's move (where the next step's search
     /// will find it).
-    fn keep_warm(&mut self, contacts: &[Contact], bodies: &[Body], start: &[Pose]) {
+    fn keep_warm<'a>(&mut self, contacts: impl Iterator<Item = &'a Contact>, bodies: &[Body], start: &[Pose]) {
         self.warm.clear();
         for c in contacts {
             if let Bound::Pin(j) = c.bound {
@@ -536,28 +595,28 @@ fn sweep(bodies: &mut [Body], contacts: &mut [Contact], rows: &Rows, sweeps: u32
     let mut residual = 0.0;
     for _ in 0..sweeps {
         for colour in &rows.colours {
-            let frozen = &*bodies;
-            let moved = spread(parallel, colour, |&i| descend(&frozen[i], frozen, contacts, &rows.of[i]));
-            for (&i, m) in colour.iter().zip(moved) {
-                bodies[i].moved = m;
+            // a colour's bodies share no row, so each one's move is the same taken in place
+            // or from the moves as the colour began
+            if parallel {
+                let frozen = &*bodies;
+                let moved: Vec<Move> =
+                    colour.par_iter().map(|&i| descend(&frozen[i], frozen, contacts, &rows.of[i])).collect();
+                for (&i, m) in colour.iter().zip(moved) {
+                    bodies[i].moved = m;
+                }
+            } else {
+                for &i in colour {
+                    bodies[i].moved = descend(&bodies[i], bodies, contacts, &rows.of[i]);
+                }
             }
         }
         let frozen = &*bodies;
-        residual = spread(parallel, &mut *contacts, |c| c.update(frozen)).into_iter().fold(0.0, f64::max);
+        residual = match parallel {
+            true => contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max),
+            false => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
+        };
     }
     residual
-}
-
-/// `each` over the items, on the current pool's threads if `parallel`; the results in order.
-fn spread<T: Send + Sync, R: Send>(
-    parallel: bool,
-    items: impl IntoParallelIterator<Item = T> + IntoIterator<Item = T> + Send,
-    each: impl Fn(T) -> R + Sync + Send,
-) -> Vec<R> {
-    match parallel {
-        true => items.into_par_iter().map(each).collect(),
-        false => items.into_iter().map(each).collect(),
-    }
 }
 
 /// A body's Newton step on its share of the energy, the others' moves held: the inertial term
@@ -580,5 +639,6 @@ fn descend(b: &Body, bodies: &[Body], contacts: &[Contact], rows: &[(usize, bool
 }
 
 mod block;
+mod islands;
 #[cfg(test)]
 mod tests;
