@@ -56,10 +56,8 @@ impl Block {
             *a += stiff[n];
             *c += twice[i][j];
         }
-        for (i, row) in rows.iter().enumerate() {
-            for j in 0..3 {
-                self.b[i][j] += row[j];
-            }
+        for (b, row) in self.b.iter_mut().zip(&rows) {
+            b.iter_mut().zip(row).for_each(|(b, r)| *b += r);
         }
         let torque = cross(arm, &pushed.into());
         for i in 0..3 {
