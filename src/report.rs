@@ -125,7 +125,12 @@ impl Summary {
             ns_per_atom_step: (r.steps > 0).then(|| r.wall_s * 1e9 / atom_steps),
             iterations: r.iterations.clone(),
             threads,
-            plan: r.plan.iter().map(|(k, p)| (k.name(), p.clone())).collect(),
+            plan: r
+                .plan
+                .iter()
+                .map(|(k, p)| (k.name(), p.clone()))
+                .chain(r.solver_plan.iter().map(|p| ("solver", p.clone())))
+                .collect(),
             checker: r.checker,
             checker_helpers: lagra_checker::quantities::helpers_started(),
             explain,

@@ -68,6 +68,8 @@ pub struct Report {
     pub checker: &'static str,
     /// How the iterations inside the solver's steps went (RATTLE, action descent).
     pub iterations: Option<Iterations>,
+    /// How the solver spread its steps over the threads, where it chose (AVBD's islands).
+    pub solver_plan: Option<String>,
     /// The averages after `equilibrate` (a thermostatted scene, or one that asked).
     pub observables: Option<Observables>,
     /// The step the run started from: 0, or a restart's.
@@ -255,6 +257,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let non_finite =
         |s: &State| scene.model.check_state(&s.snapshot()).err().map(|e| Stop::Checker(Halt::InvalidState(e)));
     let mut iterations = None;
+    let mut solver_plan = None;
     let mut solver_carried = Err("the solver could not start".to_string());
     let (monitor, busy) = std::thread::scope(|scope| -> Result<(Monitor, Option<f64>), String> {
         let mut checking = if overlap {
@@ -339,6 +342,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     stop = Some(Stop::Until { step: state.step });
                 }
                 iterations = solver.iterations().cloned();
+                solver_plan = solver.plan();
                 if restarts.is_some() {
                     solver_carried = solver.carried();
                 }
@@ -394,6 +398,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             "inline, at every checkpoint"
         },
         iterations,
+        solver_plan,
         observables: observer.and_then(Observer::finish),
         first_step,
         restart,

@@ -159,3 +159,42 @@ fn a_hinged_chain_at_ten_sweeps_keeps_its_energy_within_five_percent() {
     assert_eq!(claims.len(), 3, "{claims:?}");
     assert!(claims.iter().all(|c| c["status"] == "PASS"), "{claims:?}");
 }
+
+/// `--explain` says how AVBD spread its sweeps over the threads: island by island where the
+/// bodies fall into islands enough to share out (two towers apart), the whole with each colour
+/// spread where one island holds them all (the pyramid), the whole on one thread.
+#[test]
+fn explain_says_how_avbd_shared_out_its_islands() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxes: String = (0..4)
+        .map(|n| {
+            let (x, y) = ((n % 2) as f64 * 3.0, (n / 2) as f64 * 1.001 + 0.5005);
+            format!("entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [{x}, {y}, 0] }}\n")
+        })
+        .collect();
+    let towers = scene(
+        dir.path(),
+        "towers.lagra",
+        &format!(
+            "scene towers {{ {boxes} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }} \
+             solver {{ integrator: \"avbd\", dt: 0.005, duration: 0.05 }} }}"
+        ),
+    );
+    let pyramid = std::fs::read_to_string("scenes/block_stack.lagra")
+        .unwrap()
+        .replace("solver {", "solver { integrator: \"avbd\",");
+    let pyramid = scene(dir.path(), "pyramid.lagra", &pyramid);
+    let plan = |file: &std::path::Path, threads: &str| {
+        let o = lagra(&["run", file.to_str().unwrap(), "--threads", threads, "--steps", "10", "--explain"]);
+        let line = stdout(&o).lines().find(|l| l.starts_with("plan        solver: ")).map(str::to_string);
+        line.unwrap_or_else(|| panic!("no solver plan: {}{}", stdout(&o), stderr(&o)))
+    };
+    let apart = plan(&towers, "2");
+    assert!(apart.ends_with("island by island, a task each on the pool in 10 step(s); the last step 2 island(s), the largest of 2 bodies"), "{apart}");
+    assert!(plan(&towers, "1").ends_with("the whole on one thread in 10 step(s)"));
+    let whole = plan(&pyramid, "2");
+    assert!(
+        whole.contains("the whole, each colour spread over the pool") && whole.contains("the largest of 15 bodies"),
+        "{whole}"
+    );
+}

@@ -102,6 +102,18 @@ pub struct Avbd {
     /// Last step's contacts by pair: place, λ and k of the three rows.
     warm: HashMap<(usize, usize), Vec<(V, [f64; 3], [f64; 3])>>,
     iterations: Iterations,
+    paths: Paths,
+}
+
+/// How the steps were swept, for `--explain`: island by island on the pool, the whole with
+/// each colour spread over the pool, or the whole on one thread; and the last step's islands
+/// (where there was a pool to share them out over).
+#[derive(Default)]
+struct Paths {
+    islands: u64,
+    colours: u64,
+    alone: u64,
+    last: Option<(usize, usize)>,
 }
 
 impl Avbd {
@@ -110,7 +122,7 @@ impl Avbd {
             what: "AVBD sweeps (residual: the largest overlap beyond the stabilised target, or joint gap)",
             ..Default::default()
         };
-        Avbd { at, solids, sweeps, warm: HashMap::new(), iterations }
+        Avbd { at, solids, sweeps, warm: HashMap::new(), iterations, paths: Paths::default() }
     }
 }
 
@@ -311,15 +323,25 @@ impl Solver for Avbd {
         // wait for between colours); else the whole at once, each colour spread over the pool
         // (on one thread the whole too: taking the islands apart cost 10% of the stack's step)
         let islands = g.pool().map(|pool| (pool, Island::all(&found, &self.solids.pins, bodies.len())));
+        if let Some((_, islands)) = &islands {
+            self.paths.last = Some((islands.len(), islands.iter().map(|i| i.bodies.len()).max().unwrap_or(0)));
+        }
         let solved: Vec<Solved> = match islands {
             Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
+                self.paths.islands += 1;
                 pool.install(|| islands.par_iter().map(|i| self.solve(i, &bodies, &start, false)).collect())
             }
             _ => {
                 let whole = Island { bodies: (0..bodies.len()).collect(), touches: found, pins: self.pins() };
                 match g.pool() {
-                    Some(pool) => vec![pool.install(|| self.solve(&whole, &bodies, &start, true))],
-                    None => vec![self.solve(&whole, &bodies, &start, false)],
+                    Some(pool) => {
+                        self.paths.colours += 1;
+                        vec![pool.install(|| self.solve(&whole, &bodies, &start, true))]
+                    }
+                    None => {
+                        self.paths.alone += 1;
+                        vec![self.solve(&whole, &bodies, &start, false)]
+                    }
                 }
             }
         };
@@ -381,6 +403,24 @@ impl Solver for Avbd {
 
     fn iterations(&self) -> Option<&Iterations> {
         Some(&self.iterations)
+    }
+
+    fn plan(&self) -> Option<String> {
+        let p = &self.paths;
+        let ways = [
+            (p.islands, "island by island, a task each on the pool"),
+            (
+                p.colours,
+                "the whole, each colour spread over the pool (too few islands, or one too large, to share out)",
+            ),
+            (p.alone, "the whole on one thread"),
+        ];
+        let said: Vec<String> =
+            ways.iter().filter(|w| w.0 > 0).map(|(n, how)| format!("{how} in {n} step(s)")).collect();
+        let last = p
+            .last
+            .map_or(String::new(), |(n, most)| format!("; the last step {n} island(s), the largest of {most} bodies"));
+        (!said.is_empty()).then(|| format!("AVBD swept {}{last}", said.join(", ")))
     }
 }
 

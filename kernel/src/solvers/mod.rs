@@ -151,6 +151,11 @@ pub trait Solver {
     fn iterations(&self) -> Option<&Iterations> {
         None
     }
+    /// How it spread its steps over the run's threads, where that is its own choice
+    /// (`--explain`'s `plan        solver:` line).
+    fn plan(&self) -> Option<String> {
+        None
+    }
     /// Whether it turns the rigid bodies itself (else the stepper turns them freely after it).
     fn rotates(&self) -> bool {
         false
@@ -284,6 +289,11 @@ impl Stepper {
     /// How the iterations inside the steps went (RATTLE, action descent).
     pub fn iterations(&self) -> Option<&Iterations> {
         self.solver.iterations()
+    }
+
+    /// How the solver spread its steps over the threads, where it chose (AVBD's islands).
+    pub fn plan(&self) -> Option<String> {
+        self.solver.plan()
     }
 }
 
