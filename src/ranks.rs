@@ -84,6 +84,71 @@ impl World {
     }
 }
 
+/// The collectives a scene cut into domains needs (`lagra_run::domains`), over MPI's world.
+#[cfg(feature = "mpi")]
+pub struct Collectives(mpi::topology::SimpleCommunicator);
+
+impl World {
+    /// The world's collectives for the domains (`None` without MPI: one process).
+    #[cfg(feature = "mpi")]
+    pub fn collectives(&self) -> Option<Collectives> {
+        self.universe.as_ref().map(|u| Collectives(u.world()))
+    }
+}
+
+#[cfg(feature = "mpi")]
+impl lagra_run::domains::exchange::Exchange for Collectives {
+    fn rank(&self) -> usize {
+        use mpi::traits::Communicator;
+        self.0.rank() as usize
+    }
+
+    fn size(&self) -> usize {
+        use mpi::traits::Communicator;
+        self.0.size() as usize
+    }
+
+    /// MPI_Alltoall of the counts, then MPI_Alltoallv of the numbers.
+    fn all_to_all(&self, out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        use mpi::datatype::{Partition, PartitionMut};
+        use mpi::traits::CommunicatorCollectives;
+        use mpi::Count;
+        let count = |n: usize| Count::try_from(n).expect("a message under 2^31 numbers");
+        let starts = |c: &[Count]| c.iter().scan(0, |at, &n| Some(std::mem::replace(at, *at + n))).collect::<Vec<_>>();
+        let sent: Vec<Count> = out.iter().map(|o| count(o.len())).collect();
+        let mut got = vec![0 as Count; sent.len()];
+        self.0.all_to_all_into(&sent[..], &mut got[..]);
+        let flat: Vec<f64> = out.concat();
+        let mut back = vec![0.0; got.iter().map(|&n| n as usize).sum()];
+        let (from, to) = (starts(&sent), starts(&got));
+        self.0.all_to_all_varcount_into(
+            &Partition::new(&flat[..], &sent[..], &from[..]),
+            &mut PartitionMut::new(&mut back[..], &got[..], &to[..]),
+        );
+        let mut at = 0;
+        got.iter()
+            .map(|&n| {
+                at += n as usize;
+                back[at - n as usize..at].to_vec()
+            })
+            .collect()
+    }
+
+    /// MPI_Allreduce with MPI_MAX.
+    fn max(&self, x: &mut [f64]) {
+        use mpi::collective::SystemOperation;
+        use mpi::traits::CommunicatorCollectives;
+        let mine = x.to_vec();
+        self.0.all_reduce_into(&mine[..], x, SystemOperation::max());
+    }
+
+    /// MPI_Bcast from rank 0.
+    fn broadcast(&self, x: &mut u64) {
+        use mpi::traits::{Communicator, Root};
+        self.0.process_at_rank(0).broadcast_into(x);
+    }
+}
+
 /// MPI_Gather of the lengths, then MPI_Gatherv of the bytes.
 #[cfg(feature = "mpi")]
 fn gather(world: &mpi::topology::SimpleCommunicator, mine: Vec<u8>) -> Option<Vec<Vec<u8>>> {

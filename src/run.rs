@@ -90,6 +90,10 @@ pub struct Args {
     /// would: the claims judged up to there, the files written, a restart file to go on from.
     #[arg(long, value_name = "STEP")]
     until: Option<u64>,
+    /// Under mpirun: the bricks the periodic box is cut into, one a rank, as NXxNYxNZ (2x2x1);
+    /// without it, the grid whose bricks have the smallest halo.
+    #[arg(long, value_name = "NXxNYxNZ")]
+    grid: Option<String>,
     /// Refuse (exit 2) a scene that gives a warning: a claim its symmetries cannot support
     /// (momentum along a floor's normal), or a fluid whose kernel's support holds too few
     /// particles; without it those are warnings.
@@ -172,39 +176,46 @@ pub fn summarize(path: &str, p: &Prepared, rep: &Report, threads: usize, explain
 }
 
 pub fn main(a: Args) -> ExitCode {
-    // under mpirun, one rank runs the scene (the world lives until the run's end)
+    // under mpirun every rank reads and prepares the scene; rank 0 alone speaks
     let world = match crate::ranks::World::join() {
         Ok(w) => w,
         Err(e) => return bad(e),
     };
-    if world.size > 1 {
-        if !world.is_root() {
-            return ExitCode::SUCCESS;
-        }
-        eprintln!(
-            "lagra: rank 0 of {} runs the scene whole: a scene is not yet cut into domains across MPI ranks \
-             (issue 41); the other ranks wait",
-            world.size
-        );
-    }
+    let root = world.is_root();
+    let fail = |msg: String| if root { bad(msg) } else { ExitCode::from(2) };
     let path = a.file.display().to_string();
     let source = match crate::reading::text(&a.file, crate::reading::Limits::from_env().scene) {
         Ok(s) => s,
-        Err(e) => return bad(e),
+        Err(e) => return fail(e),
     };
     let prepared = match prepare(&source, &path, &a.set, a.dt) {
         Ok(p) => p,
         Err(e) if e.contains('\n') => {
-            eprintln!("{e}");
+            if root {
+                eprintln!("{e}");
+            }
             return ExitCode::from(2);
         }
-        Err(e) => return bad(e),
+        Err(e) => return fail(e),
     };
     let scene = &prepared.scene;
-    let threads = match lagra_run::run::threads_for(scene.model.bodies.len(), a.threads) {
+    let threads = match lagra_run::run::threads_for(scene.model.bodies.len() / world.size, a.threads) {
+        // ranks on one machine share its cores
+        Ok(t) if a.threads.is_none() => (t / world.here()).max(1),
         Ok(t) => t,
-        Err(e) => return bad(e),
+        Err(e) => return fail(e),
     };
+    let mut sharing = match Sharing::of(&world, &a, scene, threads) {
+        Ok(s) => s,
+        Err(e) => return fail(e),
+    };
+    if !root {
+        sharing.follow();
+        return ExitCode::SUCCESS;
+    }
+    if let Some(note) = sharing.note() {
+        eprintln!("lagra: {note}");
+    }
     prepared.warnings.iter().for_each(|w| eprintln!("{w}"));
     if a.strict && !prepared.warnings.is_empty() {
         return bad("--strict: the warnings above are errors");
@@ -288,6 +299,7 @@ pub fn main(a: Args) -> ExitCode {
             resume,
             until: a.until,
             restarts,
+            shared: sharing.shared(),
         },
     );
     progress.iter().for_each(Progress::done);
@@ -379,6 +391,69 @@ pub fn main(a: Args) -> ExitCode {
         Some((number, _)) => ExitCode::from(128 + number as u8),
         None if summary.passed => ExitCode::SUCCESS,
         None => ExitCode::from(1),
+    }
+}
+
+/// How the ranks of a job share a run: this process alone (no job; or rank 0 of a job whose
+/// scene is not cut, the others idle, with a note saying why), or the scene cut into domains.
+enum Sharing {
+    Alone(Option<String>),
+    #[cfg(feature = "mpi")]
+    Domains(lagra_run::domains::Domain<crate::ranks::Collectives>),
+}
+
+impl Sharing {
+    /// A collective: every rank decides alike (from the same scene and arguments) and, to cut the
+    /// scene, makes its domain.
+    fn of(world: &crate::ranks::World, a: &Args, scene: &Scene, threads: usize) -> Result<Sharing, String> {
+        if world.size == 1 {
+            return match &a.grid {
+                Some(_) => Err("--grid cuts a scene across the ranks of an MPI job: run it under mpirun".into()),
+                None => Ok(Sharing::Alone(None)),
+            };
+        }
+        let whole = |why: String| {
+            Sharing::Alone(Some(format!("rank 0 of {} runs the scene whole, the other ranks idle: {why}", world.size)))
+        };
+        if let Err(why) = lagra_run::domains::fits(scene) {
+            return Ok(whole(format!("the scene is not cut into domains: {why}")));
+        }
+        if a.restart.is_some() || a.resume.is_some() {
+            return Ok(whole("a run in domains neither writes nor reads restart files yet".into()));
+        }
+        #[cfg(feature = "mpi")]
+        if let Some(c) = world.collectives() {
+            let start = lagra_kernel::setup::start(scene);
+            return lagra_run::domains::Domain::new(c, scene, &start, a.grid.as_deref(), threads).map(Sharing::Domains);
+        }
+        let _ = threads;
+        Ok(whole("this lagra was built without MPI".into()))
+    }
+
+    /// Why rank 0 runs the scene whole, if it does.
+    fn note(&self) -> Option<&str> {
+        match self {
+            Sharing::Alone(note) => note.as_deref(),
+            #[cfg(feature = "mpi")]
+            Sharing::Domains(_) => None,
+        }
+    }
+
+    /// On a rank other than 0: its domain's share of the steps rank 0 asks for, or nothing.
+    fn follow(self) {
+        #[cfg(feature = "mpi")]
+        if let Sharing::Domains(d) = self {
+            d.follow();
+        }
+    }
+
+    /// What rank 0's run loop steps the domains through.
+    fn shared(&mut self) -> Option<&mut dyn lagra_run::domains::Shared> {
+        match self {
+            Sharing::Alone(_) => None,
+            #[cfg(feature = "mpi")]
+            Sharing::Domains(d) => Some(d),
+        }
     }
 }
 

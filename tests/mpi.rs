@@ -93,3 +93,71 @@ fn bad_input_under_mpirun_is_said_once_and_ends_the_job() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(stderr(&o).matches("harmonic has no parameter `q`").count(), 1, "{}", stderr(&o));
 }
+
+/// 6,912 Lennard-Jones atoms in a periodic box, energy and momentum certified every 20 steps.
+fn liquid(dir: &Path) -> std::path::PathBuf {
+    common::scene(
+        dir,
+        "liquid.lagra",
+        "scene liquid { entity atom { mass: 1 }
+           lattice { type: atom, kind: fcc, density: 0.8442, cells: [12, 12, 12], temperature: 2.5, seed: 5, velocities: uniform }
+           interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+           @expect energy_conservation { tol: 1e-3, every: 20 }
+           @expect momentum_conservation { every: 20 }
+           solver { dt: 0.005, steps: 60 } }",
+    )
+}
+
+#[test]
+fn a_liquid_cut_into_domains_on_two_and_four_ranks_is_certified_and_rechecked_from_its_states() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = liquid(dir.path());
+    for (ranks, grid) in [(2, "2x1x1"), (4, "2x2x1")] {
+        let (cert, states) =
+            (dir.path().join(format!("{ranks}.cert.json")), dir.path().join(format!("{ranks}.states")));
+        let o = mpirun(
+            ranks,
+            &[
+                "run",
+                scene.to_str().unwrap(),
+                "--json",
+                "--explain",
+                "--certificate",
+                cert.to_str().unwrap(),
+                "--states",
+                states.to_str().unwrap(),
+                "--grid",
+                grid,
+            ],
+        );
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let report: Value = serde_json::from_str(&stdout(&o)).expect("one report, from rank 0");
+        assert_eq!(report["passed"], true);
+        let plan = report["plan"].to_string();
+        assert!(plan.contains(&format!("domains: {} bricks on {ranks} ranks", grid.replace('x', "×"))), "{plan}");
+        assert!(!stderr(&o).contains("runs the scene whole"), "{}", stderr(&o));
+        // re-checked by one process, every state's enclosures evaluated again
+        let c = lagra(&[
+            "check",
+            cert.to_str().unwrap(),
+            "--states",
+            states.to_str().unwrap(),
+            "--scene",
+            scene.to_str().unwrap(),
+        ]);
+        assert_eq!(c.status.code(), Some(0), "{}{}", stdout(&c), stderr(&c));
+        assert!(stdout(&c).contains("AGREES"), "{}", stdout(&c));
+    }
+}
+
+#[test]
+fn a_grid_that_does_not_fit_the_job_is_said_once_and_ends_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = liquid(dir.path());
+    let o = mpirun(2, &["run", scene.to_str().unwrap(), "--grid", "3x1x1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_eq!(stderr(&o).matches("--grid 3x1x1 has 3 bricks, but the job has 2 ranks").count(), 1, "{}", stderr(&o));
+    let o = lagra(&["run", scene.to_str().unwrap(), "--grid", "2x1x1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("under mpirun"), "{}", stderr(&o));
+}

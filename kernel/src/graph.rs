@@ -42,6 +42,21 @@ pub struct LagrangianGraph {
     pool: Pool,
 }
 
+/// A pool of `threads` for the forces (none for one), which graphs may share.
+pub fn threads_of(threads: usize) -> Result<Pool, String> {
+    Ok(match threads {
+        0 => return Err("the thread count must be at least 1".into()),
+        1 => None,
+        n => Some(Arc::new(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .thread_name(|i| format!("lagra-kernel-{i}"))
+                .build()
+                .map_err(|e| format!("starting {n} threads: {e}"))?,
+        )),
+    })
+}
+
 /// Which forces an evaluation adds up.
 #[derive(Clone, Copy, PartialEq)]
 enum Which {
@@ -58,21 +73,11 @@ impl LagrangianGraph {
 
     /// On `threads` threads of a pool of its own (the forces come out the same to the bit).
     pub fn with_threads(model: &Model, threads: usize) -> Result<Self, String> {
-        let pool = match threads {
-            0 => return Err("the thread count must be at least 1".into()),
-            1 => None,
-            n => Some(Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .thread_name(|i| format!("lagra-kernel-{i}"))
-                    .build()
-                    .map_err(|e| format!("starting {n} threads: {e}"))?,
-            )),
-        };
-        Ok(Self::with_pool(model, pool))
+        Ok(Self::with_pool(model, threads_of(threads)?))
     }
 
-    fn with_pool(model: &Model, pool: Pool) -> Self {
+    /// On the threads of `pool` (none: one thread), shared with other graphs.
+    pub fn with_pool(model: &Model, pool: Pool) -> Self {
         let mut groups = vec![];
         for &kind in Kind::ALL {
             let instances: Vec<_> = model.terms.iter().enumerate().filter(|t| t.1.kind == kind).collect();

@@ -289,6 +289,7 @@ impl PyScene {
                 resume: resumed,
                 until,
                 restarts,
+                shared: None,
             };
             run(scene, opts)
         });

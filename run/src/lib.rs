@@ -4,6 +4,7 @@
 //! observables and their tail corrections, the scene's predictions, gradients of whole runs.
 
 pub mod checking;
+pub mod domains;
 pub mod grad;
 pub mod marks;
 pub mod observables;

@@ -3,6 +3,7 @@
 //! state halts the run at that step.
 
 use crate::checking::{can_overlap, Checking};
+use crate::domains::Shared;
 use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
 use crate::restart::{setup_of, Restart};
@@ -109,6 +110,9 @@ pub struct Options<'a> {
     /// What goes on from the state reached is made at the end of the run (`Report::restart`),
     /// and every so many steps on the way, handed to the writer.
     pub restarts: Option<Restarts<'a>>,
+    /// The ranks of a job that step the scene in domains (`crate::domains`), rank 0's run loop
+    /// driving them; `None`: this process steps it alone.
+    pub shared: Option<&'a mut dyn Shared>,
 }
 
 /// Restart files made along a run, besides the one at its end.
@@ -133,6 +137,7 @@ impl Options<'_> {
             resume: None,
             until: None,
             restarts: None,
+            shared: None,
         }
     }
 }
@@ -206,6 +211,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     }
     let end = opts.until.map_or(steps, |u| u.min(steps));
     let mut restarts = opts.restarts.take();
+    let mut shared = opts.shared.take();
+    if shared.is_some() && (!meters.is_empty() || observer.is_some() || restarts.is_some() || carried.is_some()) {
+        return Err(
+            "a run in domains measures no prediction or observable and neither reads nor writes restarts".into()
+        );
+    }
     let every_restart = restarts.as_ref().map_or(u64::MAX, |r| r.every.max(1));
     let tracing = opts.trace.is_some();
     // (a restart made on the way takes the monitor from the kernel's thread)
@@ -297,12 +308,17 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         let due = checking.next_due(state.step).min(next_frame).min(next_look);
                         due.min(next(stride, state.step)).min(sampled).min(next(every_restart, state.step))
                     };
-                    if let Err(e) = solver.advance_to(&graph, &mut state, dt, until.min(end)) {
-                        stop = Some(Stop::Solver { step: state.step + 1, message: e.to_string() });
+                    let advanced = match shared.as_mut() {
+                        Some(d) => d.advance_to(&mut state, until.min(end)),
+                        None => solver.advance_to(&graph, &mut state, dt, until.min(end)).map_err(|e| e.to_string()),
+                    };
+                    if let Err(message) = advanced {
+                        stop = Some(Stop::Solver { step: state.step + 1, message });
                         break;
                     }
                     stop = check(&mut checking, &mut state, true)?;
-                    if stop.is_none() && !solver.potential().is_finite() {
+                    // (the domains' forces were tested finite on their ranks)
+                    if stop.is_none() && shared.is_none() && !solver.potential().is_finite() {
                         stop = non_finite(&state);
                     }
                     meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
@@ -310,7 +326,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         sample(&mut observer, &state, solver.potential())?;
                     }
                     if tracing && (state.step.is_multiple_of(frame) || state.step == steps) {
-                        trace(&state, solver.potential())?;
+                        let potential = match shared {
+                            // the state is gathered here, its potential energy is not: worked out whole
+                            Some(_) => whole_potential(&graph, &state)?,
+                            None => solver.potential(),
+                        };
+                        trace(&state, potential)?;
                     }
                     if let Some(w) = watch.as_mut().filter(|w| state.step.is_multiple_of(w.every.max(1))) {
                         (w.see)(&state);
@@ -342,7 +363,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     stop = Some(Stop::Until { step: state.step });
                 }
                 iterations = solver.iterations().cloned();
-                solver_plan = solver.plan();
+                solver_plan = shared.as_ref().map_or_else(|| solver.plan(), |d| Some(d.plan()));
                 if restarts.is_some() {
                     solver_carried = solver.carried();
                 }
@@ -380,7 +401,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         Some(Stop::Solver { step, message }) => Err(format!("the solver failed at step {step} ({message})")),
         _ => carry(&state, (scene, steps), solver_carried, &graph, monitor.carried(), &observer, &meters),
     });
-    let plan = graph.plan();
+    // (in domains rank 0's whole graph only evaluated the first state: the solver's plan says
+    // how its share was visited)
+    let plan = if shared.is_some() { vec![] } else { graph.plan() };
     Ok(Report {
         planned_steps: steps,
         steps: state.step,
@@ -403,6 +426,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         first_step,
         restart,
     })
+}
+
+/// The potential energy of a whole state, for a trace frame of a run in domains (rank 0 has the
+/// state there, and no force of it).
+fn whole_potential(graph: &LagrangianGraph, s: &State) -> Result<f64, String> {
+    graph.forces(s, &mut vec![[0.0; 3]; s.x.len()]).map_err(|e| format!("the trace's energy at step {}: {e}", s.step))
 }
 
 /// What goes on from state `s` (the front names its scene and certificate).

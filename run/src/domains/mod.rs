@@ -1,0 +1,393 @@
+//! A scene cut into domains across the ranks of a job (`mpirun -np P lagra run SCENE`): the
+//! periodic box cut into bricks (`bricks`), each rank owning the atoms in its brick and taking
+//! as ghosts every atom within the halo (the terms' reach plus a skin) of it, velocity Verlet
+//! stepped on each rank over its own atoms with the kernel's forces of its local system, the
+//! ghosts' positions exchanged every step, and atoms moved to their owners (and the ghosts
+//! chosen again) when one has moved half the skin since the last choice.
+//!
+//! What the kernel sees on a rank is an ordinary graph: the scene's model with the rank's atoms
+//! then its ghosts as bodies. The pair terms' nearest image in the whole box makes one copy of
+//! each ghost enough, so any rank may need a ghost from any other: the exchanges are
+//! all-to-all. A force on a ghost is computed and dropped; a pair across two bricks is computed
+//! on both ranks (LAMMPS's `newton off`), so no force travels back.
+//!
+//! The bits: a rank's atoms are kept in the order of their numbers, its ghosts in the order of
+//! their senders and then of the senders' atoms, so a run on P ranks gives the same bits every
+//! time and on any thread count. A different P sums each atom's pair forces in another order,
+//! so trajectories agree with the one-process run to round-off that grows as the dynamics
+//! amplifies it (tested against a bound in `tests`).
+//!
+//! The claims are judged by rank 0's ordinary checker on the whole state, gathered at each
+//! state it is shown (`Shared::advance_to`): a certificate is the one a single process would
+//! write for that state, re-checked by `lagra-check` anywhere. The cost: one gather of every
+//! atom's position and velocity to rank 0 per checkpoint, and the checker's work there.
+
+pub mod bricks;
+pub mod exchange;
+
+use bricks::Bricks;
+use exchange::Exchange;
+use lagra_checker::model::Model;
+use lagra_checker::terms::Shape;
+use lagra_kernel::forces::Pool;
+use lagra_kernel::graph::LagrangianGraph;
+use lagra_kernel::state::State;
+use lagra_kernel::step::{kick, kick_drift, set_step};
+use lagra_lang::integrator::Integrator;
+use lagra_lang::scene::Scene;
+use std::time::Instant;
+
+/// The skin beyond the reach, as a fraction of it (the kernel's lists use the same).
+const SKIN: f64 = 0.12;
+
+/// What rank 0 broadcasts to end the followers' loop.
+const STOP: u64 = u64::MAX;
+
+/// Why a scene cannot be cut into domains, if it cannot: what this first decomposition does
+/// not carry across ranks yet runs whole on rank 0 instead.
+pub fn fits(scene: &Scene) -> Result<(), String> {
+    let m = &scene.model;
+    let not = |why: &str| Err(format!("it {why}, which the domains do not carry across ranks yet"));
+    match m.cell {
+        Some(c) if c.periodic.iter().all(|&p| p) => {}
+        _ => return Err("it has no box periodic along all three axes to cut into bricks".into()),
+    }
+    if scene.solver.integrator != Integrator::VelocityVerlet {
+        return not(&format!("is stepped by {}, not velocity_verlet", scene.solver.integrator.name()));
+    }
+    if let Some(t) = m.terms.iter().find(|t| t.kind.spec().shape != Shape::Pairwise || !t.sites.is_empty()) {
+        return not(&format!("has a {} term (only interactions between every pair are cut)", t.kind.name()));
+    }
+    if let Some(t) = m.terms.iter().find(|t| !t.kind.reach(&t.params).is_finite() || t.kind.reads().v) {
+        return not(&format!("has a {} term without a cut-off or with a velocity-dependent force", t.kind.name()));
+    }
+    if m.terms.is_empty() {
+        return not("has no interaction");
+    }
+    if !m.constraints.is_empty() || !m.pins.is_empty() || m.floor.is_some() || m.thermostat.is_some() {
+        return not("has constraints, joints, a floor or a thermostat");
+    }
+    if m.bodies.iter().any(|b| b.moments.is_some() || b.solid.is_some()) {
+        return not("has rigid or solid bodies");
+    }
+    if !scene.predictions.is_empty() || scene.sampling.is_some() {
+        return not("has predictions or sampled observables (measured at every step on rank 0)");
+    }
+    Ok(())
+}
+
+/// Steps taken by every rank together, seen from rank 0's run loop: advance to a step and
+/// gather the whole state there.
+pub trait Shared {
+    fn advance_to(&mut self, s: &mut State, until: u64) -> Result<(), String>;
+    /// How the work was shared, for `--explain`.
+    fn plan(&self) -> String;
+}
+
+/// One rank's share of the run: its atoms, its ghosts, and the kernel's graph of them.
+pub struct Domain<E: Exchange> {
+    ex: E,
+    bricks: Bricks,
+    reach: f64,
+    halo: f64,
+    dt: f64,
+    pool: Pool,
+    /// The scene's model: its bodies by number, for the local graph's.
+    model: Model,
+    /// The atoms this rank owns, by number, ascending.
+    owned: Vec<usize>,
+    /// For each rank, the places in `owned` of the atoms it takes as ghosts.
+    send: Vec<Vec<usize>>,
+    /// The ghosts' numbers, in their places after the owned atoms.
+    ghosts: Vec<usize>,
+    /// The owned atoms then the ghosts (velocities of ghosts zero: no force reads them).
+    local: State,
+    /// The forces on `local`, owned first; between steps, the owned atoms' at the state reached.
+    f: Vec<[f64; 3]>,
+    inverse: Vec<f64>,
+    /// The owned atoms' positions when the ghosts were last chosen.
+    since: Vec<[f64; 3]>,
+    graph: LagrangianGraph,
+    step: u64,
+    tally: Tally,
+    /// Whether the owned atoms are those the graph was made with, in its order.
+    owned_kept: bool,
+    /// Whether rank 0's share, dropped, sends the others home: once every rank has one.
+    leads: bool,
+}
+
+/// What the plan reports.
+#[derive(Default)]
+struct Tally {
+    regroups: u64,
+    ghosts: u64,
+    owned: u64,
+    talking: f64,
+    started: Option<Instant>,
+}
+
+impl<E: Exchange> Domain<E> {
+    /// This rank's share of the scene at state `s` (every rank passes the same), the box cut
+    /// by `grid` ("2x2x1") or by the ranks and the box. A collective. `threads` for this rank's
+    /// forces.
+    pub fn new(ex: E, scene: &Scene, s: &State, grid: Option<&str>, threads: usize) -> Result<Self, String> {
+        fits(scene)?;
+        let model = scene.model.clone();
+        let cell = model.cell.expect("fits: a periodic box");
+        let reach = model.terms.iter().map(|t| t.kind.reach(&t.params)).fold(0.0, f64::max);
+        let halo = reach * (1.0 + SKIN);
+        let bricks = match grid {
+            Some(g) => Bricks::given(g, ex.size(), cell.size, halo)?,
+            None => Bricks::chosen(ex.size(), cell.size, halo)?,
+        };
+        let pool = lagra_kernel::graph::threads_of(threads)?;
+        let me = ex.rank();
+        let owned: Vec<usize> = (0..s.x.len()).filter(|&i| bricks.owner(s.x[i]) == me).collect();
+        let local = State {
+            step: s.step,
+            t: s.t,
+            x: owned.iter().map(|&i| s.x[i]).collect(),
+            v: owned.iter().map(|&i| s.v[i]).collect(),
+            chain: vec![],
+            spin: vec![],
+        };
+        let graph = LagrangianGraph::with_pool(&Model { bodies: vec![], ..model.clone() }, None);
+        let mut d = Domain {
+            ex,
+            bricks,
+            reach,
+            halo,
+            dt: scene.solver.dt,
+            pool,
+            model,
+            owned,
+            send: vec![],
+            ghosts: vec![],
+            local,
+            f: vec![],
+            inverse: vec![],
+            since: vec![],
+            graph,
+            step: s.step,
+            tally: Tally { started: Some(Instant::now()), ..Tally::default() },
+            leads: false,
+            owned_kept: false,
+        };
+        d.regroup();
+        d.forces()?;
+        d.leads = d.ex.rank() == 0;
+        Ok(d)
+    }
+
+    /// Chooses the ghosts again: each rank's atoms near another's brick are sent there, and the
+    /// local graph is made of the owned atoms and the ghosts received.
+    fn regroup(&mut self) {
+        let (me, n) = (self.ex.rank(), self.owned.len());
+        let mut send = vec![vec![]; self.ex.size()];
+        for (k, &x) in self.local.x[..n].iter().enumerate() {
+            self.bricks.near(x, self.halo, |r| {
+                if r != me {
+                    send[r].push(k)
+                }
+            });
+        }
+        let out = send
+            .iter()
+            .map(|s| s.iter().flat_map(|&k| with_number(self.owned[k], self.local.x[k])).collect())
+            .collect();
+        let got = self.talk(|ex| ex.all_to_all(out));
+        let ghosts: Vec<usize> = got.iter().flat_map(|g| g.chunks_exact(4)).map(|g| g[0] as usize).collect();
+        self.local.x.truncate(n);
+        self.local.x.extend(got.iter().flat_map(|g| g.chunks_exact(4)).map(|g| [g[1], g[2], g[3]]));
+        self.local.v.resize(n, [0.0; 3]);
+        self.local.v.resize(n + ghosts.len(), [0.0; 3]);
+        self.f = vec![[0.0; 3]; n + ghosts.len()];
+        self.inverse = self.owned.iter().map(|&i| 1.0 / self.model.bodies[i].mass).collect();
+        self.since = self.local.x[..n].to_vec();
+        // the same bodies in the same places keep their graph, and its neighbour list, which
+        // rebuilds itself as the bodies move: on one rank, the one-process run's bits
+        if ghosts != self.ghosts || !self.owned_kept {
+            let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.model.bodies[i].clone()).collect();
+            self.graph = LagrangianGraph::with_pool(&Model { bodies, ..self.model.clone() }, self.pool.clone());
+        }
+        self.owned_kept = true;
+        self.send = send;
+        self.ghosts = ghosts;
+        self.tally.regroups += 1;
+        self.tally.ghosts += self.ghosts.len() as u64;
+        self.tally.owned += n as u64;
+    }
+
+    /// Moves each atom that left this rank's brick to its owner; keeps the owned in number order.
+    fn migrate(&mut self) {
+        let (me, n) = (self.ex.rank(), self.owned.len());
+        let mut out = vec![vec![]; self.ex.size()];
+        let mut kept = vec![];
+        for k in 0..n {
+            match self.bricks.owner(self.local.x[k]) {
+                r if r == me => kept.push(k),
+                r => out[r].extend(with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k])),
+            }
+        }
+        let got = self.talk(|ex| ex.all_to_all(out));
+        let mut atoms: Vec<(usize, [f64; 3], [f64; 3])> =
+            kept.iter().map(|&k| (self.owned[k], self.local.x[k], self.local.v[k])).collect();
+        atoms.extend(
+            got.iter().flat_map(|g| g.chunks_exact(7)).map(|a| (a[0] as usize, [a[1], a[2], a[3]], [a[4], a[5], a[6]])),
+        );
+        atoms.sort_unstable_by_key(|a| a.0);
+        let owned: Vec<usize> = atoms.iter().map(|a| a.0).collect();
+        self.owned_kept = owned == self.owned;
+        self.owned = owned;
+        self.local.x = atoms.iter().map(|a| a.1).collect();
+        self.local.v = atoms.iter().map(|a| a.2).collect();
+    }
+
+    /// The ghosts' positions, from their owners, in the order chosen at the last regroup.
+    fn share_positions(&mut self) {
+        let n = self.owned.len();
+        let out = self.send.iter().map(|s| s.iter().flat_map(|&k| self.local.x[k]).collect()).collect();
+        let got = self.talk(|ex| ex.all_to_all(out));
+        for (slot, x) in self.local.x[n..].iter_mut().zip(got.iter().flat_map(|g| g.chunks_exact(3))) {
+            *slot = [x[0], x[1], x[2]];
+        }
+    }
+
+    /// The forces on the local system; every rank learns whether any rank's failed (the lowest
+    /// such rank, which says why on its stderr).
+    fn forces(&mut self) -> Result<(), String> {
+        let mine = self.graph.forces_only(&self.local, &mut self.f);
+        if let Err(e) = &mine {
+            eprintln!("lagra (rank {}): at step {}: {e}", self.ex.rank(), self.step + 1);
+        }
+        // the lowest failing rank, as the largest −rank
+        let mut failed = [mine.as_ref().map_or(-(self.ex.rank() as f64), |_| f64::NEG_INFINITY)];
+        self.talk(|ex| ex.max(&mut failed));
+        match (mine, failed[0]) {
+            (_, f64::NEG_INFINITY) => Ok(()),
+            (Err(e), _) => Err(e.to_string()),
+            (Ok(()), r) => Err(format!("the forces on rank {} could not be evaluated (it says why on its stderr)", -r)),
+        }
+    }
+
+    /// One velocity Verlet step of the owned atoms, as the one-process solver takes it (the same
+    /// arithmetic per atom, `kick_drift` then `kick`).
+    fn step(&mut self) -> Result<(), String> {
+        let (n, h) = (self.owned.len(), 0.5 * self.dt);
+        let spread = self.graph.spread();
+        let l = &mut self.local;
+        kick_drift(&mut l.x[..n], &mut l.v[..n], &mut self.f[..n], &self.inverse, (h, self.dt), false, spread);
+        let moved = l.x[..n].iter().zip(&self.since).map(|(x, s)| dist2(x, s)).fold(0.0, f64::max);
+        let mut far = [moved];
+        self.talk(|ex| ex.max(&mut far));
+        let skin = self.halo - self.reach;
+        if far[0] > 0.25 * skin * skin {
+            self.migrate();
+            self.regroup();
+        } else {
+            self.share_positions();
+        }
+        self.forces()?;
+        let n = self.owned.len();
+        kick(&mut self.local.v[..n], &self.f[..n], &self.inverse, h);
+        self.step += 1;
+        Ok(())
+    }
+
+    fn steps_to(&mut self, until: u64) -> Result<(), String> {
+        while self.step < until {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    /// Every rank's atoms at rank 0, into `whole` (on the other ranks `None`). A collective.
+    fn gather(&mut self, whole: Option<&mut State>) {
+        let n = self.owned.len();
+        let mut out = vec![vec![]; self.ex.size()];
+        out[0] = (0..n)
+            .flat_map(|k| with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k]))
+            .collect();
+        let got = self.talk(|ex| ex.all_to_all(out));
+        if let Some(s) = whole {
+            for a in got.iter().flat_map(|g| g.chunks_exact(7)) {
+                let i = a[0] as usize;
+                (s.x[i], s.v[i]) = ([a[1], a[2], a[3]], [a[4], a[5], a[6]]);
+            }
+            set_step(s, self.step, self.dt);
+        }
+    }
+
+    /// Follows rank 0's run loop on another rank: advances where it says, until it says stop.
+    pub fn follow(mut self) {
+        loop {
+            let mut until = 0;
+            self.ex.broadcast(&mut until);
+            if until == STOP {
+                return;
+            }
+            // a failure is rank 0's to report: every rank knows it and stops at the same step
+            let _ = self.steps_to(until);
+            self.gather(None);
+        }
+    }
+
+    fn talk<T>(&mut self, say: impl FnOnce(&E) -> T) -> T {
+        let t = Instant::now();
+        let r = say(&self.ex);
+        self.tally.talking += t.elapsed().as_secs_f64();
+        r
+    }
+}
+
+impl<E: Exchange> Shared for Domain<E> {
+    fn advance_to(&mut self, s: &mut State, until: u64) -> Result<(), String> {
+        let mut u = until;
+        self.ex.broadcast(&mut u);
+        let done = self.steps_to(until);
+        self.gather(Some(s));
+        done
+    }
+
+    fn plan(&self) -> String {
+        let t = &self.tally;
+        let [px, py, pz] = self.bricks.counts;
+        let total = t.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
+        format!(
+            "domains: {px}×{py}×{pz} bricks on {} ranks, halo {:.3} (reach {} + skin {:.3}); ghosts chosen {} time(s), \
+             {:.0}% as many ghosts as owned atoms on rank 0; rank 0 spent {:.3} s of {:.3} s in exchanges (its waits \
+             for the other ranks included); rank 0's forces since its ghosts were last chosen: {}",
+            self.ex.size(),
+            self.halo,
+            self.reach,
+            self.halo - self.reach,
+            t.regroups,
+            100.0 * t.ghosts as f64 / t.owned.max(1) as f64,
+            t.talking,
+            total,
+            self.graph.plan().into_iter().map(|(_, p)| p).collect::<Vec<_>>().join("; ")
+        )
+    }
+}
+
+impl<E: Exchange> Drop for Domain<E> {
+    /// Rank 0's share, dropped when its run ends (or fails), sends the others home.
+    fn drop(&mut self) {
+        if self.leads {
+            let mut stop = STOP;
+            self.ex.broadcast(&mut stop);
+        }
+    }
+}
+
+/// An atom's number (exact in an f64 below 2^53) and its position.
+fn with_number(i: usize, x: [f64; 3]) -> [f64; 4] {
+    [i as f64, x[0], x[1], x[2]]
+}
+
+fn dist2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|c| (a[c] - b[c]) * (a[c] - b[c])).sum()
+}
+
+#[cfg(test)]
+mod tests;
