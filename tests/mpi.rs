@@ -128,6 +128,8 @@ fn a_liquid_cut_into_domains_on_two_and_four_ranks_is_certified_and_rechecked_fr
                 states.to_str().unwrap(),
                 "--grid",
                 grid,
+                "--trace",
+                dir.path().join("t.jsonl").to_str().unwrap(),
             ],
         );
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -136,6 +138,12 @@ fn a_liquid_cut_into_domains_on_two_and_four_ranks_is_certified_and_rechecked_fr
         let plan = report["plan"].to_string();
         assert!(plan.contains(&format!("domains: {} bricks on {ranks} ranks", grid.replace('x', "×"))), "{plan}");
         assert!(!stderr(&o).contains("runs the scene whole"), "{}", stderr(&o));
+        // every frame, its energy witness worked out on rank 0 from the gathered state
+        let frames = std::fs::read_to_string(dir.path().join("t.jsonl")).unwrap();
+        let energies: Vec<f64> =
+            frames.lines().map(|l| serde_json::from_str::<Value>(l).unwrap()["energy"].as_f64().unwrap()).collect();
+        assert_eq!(energies.len(), 7, "a frame every 10 steps (the default), and the first");
+        assert!(energies.iter().all(|e| (e / energies[0] - 1.0).abs() < 1e-3), "{energies:?}");
         // re-checked by one process, every state's enclosures evaluated again
         let c = lagra(&[
             "check",

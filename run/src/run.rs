@@ -12,7 +12,7 @@ use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
 use lagra_checker::terms::Kind;
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::solvers::{Iterations, Stepper};
+use lagra_kernel::solvers::{Evaluated, Iterations, Stepper};
 use lagra_kernel::state::{kinetic, State};
 use lagra_lang::prediction::Prediction;
 use lagra_lang::scene::Scene;
@@ -276,7 +276,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         } else {
             Checking::Inline(monitor)
         };
-        match Stepper::for_scene(scene, &graph, &state) {
+        // in domains the ranks evaluated the first state's forces; rank 0's solver steps nothing
+        let stepper = match shared {
+            Some(_) => Ok(Stepper::resume_verlet(Evaluated { f: vec![], potential: f64::NAN })),
+            None => Stepper::for_scene(scene, &graph, &state),
+        };
+        match stepper {
             Err(e) => stop = Some(Stop::Solver { step: 0, message: e.to_string() }),
             Ok(mut solver) => {
                 let sample =
@@ -295,7 +300,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         sample(&mut observer, &state, solver.potential())?;
                     }
                 }
-                trace(&state, solver.potential())?;
+                if tracing {
+                    trace(
+                        &state,
+                        if shared.is_some() { whole_potential(&graph, &state)? } else { solver.potential() },
+                    )?;
+                }
                 let frame = scene.solver.steps_per_frame.max(1);
                 let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
                 while stop.is_none() && state.step < end {
