@@ -95,38 +95,33 @@ impl Bricks {
     }
 
     /// Every rank whose brick lies nearer than `halo` to the point, through the periodic box
-    /// (its owner among them), each once, in rank order along each axis.
+    /// (its owner among them), each once. A brick is at least `halo` wide along a cut axis
+    /// (`chosen`, `given`), so along each only the point's brick and its two neighbours can be.
     pub fn near(&self, x: [f64; 3], halo: f64, mut visit: impl FnMut(usize)) {
-        // per axis: the bricks within the halo and the distance to each (0 inside)
-        let mut along: [Vec<(usize, f64)>; 3] = Default::default();
+        // per axis: up to three bricks within the halo and the distance to each (0 inside)
+        let mut along = [[(0, 0.0); 3]; 3];
+        let mut count = [1; 3];
         for a in 0..3 {
             let (l, p) = (self.size[a], self.counts[a]);
+            let home = self.index(a, x[a]);
+            along[a][0] = (home, 0.0);
             if p == 1 {
-                along[a].push((0, 0.0));
                 continue;
             }
             let w = l / p as f64;
-            let home = self.index(a, x[a]);
             let u = x[a].rem_euclid(l);
-            for k in 0..p {
-                let d = if k == home {
-                    0.0
-                } else {
-                    let past = (u - k as f64 * w).rem_euclid(l);
-                    if past < w {
-                        0.0
-                    } else {
-                        (past - w).min(l - past)
-                    }
-                };
-                if d < halo {
-                    along[a].push((k, d));
+            for k in [(home + p - 1) % p, (home + 1) % p] {
+                let past = (u - k as f64 * w).rem_euclid(l);
+                let d = if past < w { 0.0 } else { (past - w).min(l - past) };
+                if d < halo && along[a][..count[a]].iter().all(|c| c.0 != k) {
+                    along[a][count[a]] = (k, d);
+                    count[a] += 1;
                 }
             }
         }
-        for &(kz, dz) in &along[2] {
-            for &(ky, dy) in &along[1] {
-                for &(kx, dx) in &along[0] {
+        for &(kz, dz) in &along[2][..count[2]] {
+            for &(ky, dy) in &along[1][..count[1]] {
+                for &(kx, dx) in &along[0][..count[0]] {
                     if dx * dx + dy * dy + dz * dz < halo * halo {
                         visit(self.rank_of([kx, ky, kz]));
                     }

@@ -92,8 +92,10 @@ pub struct Domain<E: Exchange> {
     halo: f64,
     dt: f64,
     pool: Pool,
-    /// The scene's model: its bodies by number, for the local graph's.
+    /// The scene's model without its bodies, and its bodies by number: the local graph's are
+    /// the owned atoms' and the ghosts'.
     model: Model,
+    bodies: Vec<lagra_checker::model::Body>,
     /// The atoms this rank owns, by number, ascending.
     owned: Vec<usize>,
     /// For each rank, the places in `owned` of the atoms it takes as ghosts.
@@ -123,6 +125,9 @@ struct Tally {
     ghosts: u64,
     owned: u64,
     talking: f64,
+    /// Seconds in migrating and choosing ghosts (exchanges included), and in the forces.
+    regrouping: f64,
+    forcing: f64,
     started: Option<Instant>,
 }
 
@@ -132,7 +137,8 @@ impl<E: Exchange> Domain<E> {
     /// forces.
     pub fn new(ex: E, scene: &Scene, s: &State, grid: Option<&str>, threads: usize) -> Result<Self, String> {
         fits(scene)?;
-        let model = scene.model.clone();
+        let model = Model { bodies: vec![], ..scene.model.clone() };
+        let bodies = scene.model.bodies.clone();
         let cell = model.cell.expect("fits: a periodic box");
         let reach = model.terms.iter().map(|t| t.kind.reach(&t.params)).fold(0.0, f64::max);
         let halo = reach * (1.0 + SKIN);
@@ -151,7 +157,7 @@ impl<E: Exchange> Domain<E> {
             chain: vec![],
             spin: vec![],
         };
-        let graph = LagrangianGraph::with_pool(&Model { bodies: vec![], ..model.clone() }, None);
+        let graph = LagrangianGraph::with_pool(&model, None);
         let mut d = Domain {
             ex,
             bricks,
@@ -160,6 +166,7 @@ impl<E: Exchange> Domain<E> {
             dt: scene.solver.dt,
             pool,
             model,
+            bodies,
             owned,
             send: vec![],
             ghosts: vec![],
@@ -202,12 +209,12 @@ impl<E: Exchange> Domain<E> {
         self.local.v.resize(n, [0.0; 3]);
         self.local.v.resize(n + ghosts.len(), [0.0; 3]);
         self.f = vec![[0.0; 3]; n + ghosts.len()];
-        self.inverse = self.owned.iter().map(|&i| 1.0 / self.model.bodies[i].mass).collect();
+        self.inverse = self.owned.iter().map(|&i| 1.0 / self.bodies[i].mass).collect();
         self.since = self.local.x[..n].to_vec();
         // the same bodies in the same places keep their graph, and its neighbour list, which
         // rebuilds itself as the bodies move: on one rank, the one-process run's bits
         if ghosts != self.ghosts || !self.owned_kept {
-            let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.model.bodies[i].clone()).collect();
+            let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.bodies[i].clone()).collect();
             self.graph = LagrangianGraph::with_pool(&Model { bodies, ..self.model.clone() }, self.pool.clone());
         }
         self.owned_kept = true;
@@ -282,12 +289,16 @@ impl<E: Exchange> Domain<E> {
         self.talk(|ex| ex.max(&mut far));
         let skin = self.halo - self.reach;
         if far[0] > 0.25 * skin * skin {
+            let t = Instant::now();
             self.migrate();
             self.regroup();
+            self.tally.regrouping += t.elapsed().as_secs_f64();
         } else {
             self.share_positions();
         }
+        let t = Instant::now();
         self.forces()?;
+        self.tally.forcing += t.elapsed().as_secs_f64();
         let n = self.owned.len();
         kick(&mut self.local.v[..n], &self.f[..n], &self.inverse, h);
         self.step += 1;
@@ -356,7 +367,8 @@ impl<E: Exchange> Shared for Domain<E> {
         format!(
             "domains: {px}×{py}×{pz} bricks on {} ranks, halo {:.3} (reach {} + skin {:.3}); ghosts chosen {} time(s), \
              {:.0}% as many ghosts as owned atoms on rank 0; rank 0 spent {:.3} s of {:.3} s in exchanges (its waits \
-             for the other ranks included); rank 0's forces since its ghosts were last chosen: {}",
+             for the other ranks included), {:.3} s moving atoms and choosing ghosts, {:.3} s in forces; rank 0's \
+             forces since its ghosts were last chosen: {}",
             self.ex.size(),
             self.halo,
             self.reach,
@@ -365,6 +377,8 @@ impl<E: Exchange> Shared for Domain<E> {
             100.0 * t.ghosts as f64 / t.owned.max(1) as f64,
             t.talking,
             total,
+            t.regrouping,
+            t.forcing,
             self.graph.plan().into_iter().map(|(_, p)| p).collect::<Vec<_>>().join("; ")
         )
     }
