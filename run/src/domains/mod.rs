@@ -22,12 +22,14 @@
 //! write for that state, re-checked by `lagra-check` anywhere. The cost: one gather of every
 //! atom's position and velocity to rank 0 per checkpoint, and the checker's work there.
 
+pub mod bonded;
 pub mod bricks;
 pub mod exchange;
 
+use bonded::Bonded;
 use bricks::Bricks;
 use exchange::Exchange;
-use lagra_checker::model::Model;
+use lagra_checker::model::{Model, TermInstance};
 use lagra_checker::terms::Shape;
 use lagra_kernel::forces::Pool;
 use lagra_kernel::graph::LagrangianGraph;
@@ -55,11 +57,16 @@ pub fn fits(scene: &Scene) -> Result<(), String> {
     if scene.solver.integrator != Integrator::VelocityVerlet {
         return not(&format!("is stepped by {}, not velocity_verlet", scene.solver.integrator.name()));
     }
-    if let Some(t) = m.terms.iter().find(|t| t.kind.spec().shape != Shape::Pairwise || !t.sites.is_empty()) {
-        return not(&format!("has a {} term (only interactions between every pair are cut)", t.kind.name()));
+    let pairs = |t: &&TermInstance| t.kind.spec().shape == Shape::Pairwise;
+    let bonds = |t: &&TermInstance| matches!(t.kind.spec().shape, Shape::Bond(_)) && !t.sites.is_empty();
+    if let Some(t) = m.terms.iter().find(|t| !pairs(t) && !bonds(t)) {
+        return not(&format!("has a {} term (interactions between pairs and bonded terms are cut)", t.kind.name()));
     }
-    if let Some(t) = m.terms.iter().find(|t| !t.kind.reach(&t.params).is_finite() || t.kind.reads().v) {
-        return not(&format!("has a {} term without a cut-off or with a velocity-dependent force", t.kind.name()));
+    if let Some(t) = m.terms.iter().filter(pairs).find(|t| !t.kind.reach(&t.params).is_finite()) {
+        return not(&format!("has a {} term without a cut-off", t.kind.name()));
+    }
+    if let Some(t) = m.terms.iter().find(|t| t.kind.reads().v || t.dissipates()) {
+        return not(&format!("has a {} term whose force depends on the velocities", t.kind.name()));
     }
     if m.terms.is_empty() {
         return not("has no interaction");
@@ -96,6 +103,7 @@ pub struct Domain<E: Exchange> {
     /// the owned atoms' and the ghosts'.
     model: Model,
     bodies: Vec<lagra_checker::model::Body>,
+    bonded: Bonded,
     /// The atoms this rank owns, by number, ascending.
     owned: Vec<usize>,
     /// For each rank, the places in `owned` of the atoms it takes as ghosts.
@@ -137,10 +145,13 @@ impl<E: Exchange> Domain<E> {
     /// forces.
     pub fn new(ex: E, scene: &Scene, s: &State, grid: Option<&str>, threads: usize) -> Result<Self, String> {
         fits(scene)?;
-        let model = Model { bodies: vec![], ..scene.model.clone() };
+        // the pair terms are every rank's; the bonded ones each rank's own (`Bonded::local`)
+        let pairs = scene.model.terms.iter().filter(|t| t.sites.is_empty()).cloned().collect();
+        let model = Model { bodies: vec![], terms: pairs, ..scene.model.clone() };
         let bodies = scene.model.bodies.clone();
+        let bonded = Bonded::of(&scene.model, &s.x);
         let cell = model.cell.expect("fits: a periodic box");
-        let reach = model.terms.iter().map(|t| t.kind.reach(&t.params)).fold(0.0, f64::max);
+        let reach = model.terms.iter().map(|t| t.kind.reach(&t.params)).fold(bonded.span, f64::max);
         let halo = reach * (1.0 + SKIN);
         let bricks = match grid {
             Some(g) => Bricks::given(g, ex.size(), cell.size, halo)?,
@@ -167,6 +178,7 @@ impl<E: Exchange> Domain<E> {
             pool,
             model,
             bodies,
+            bonded,
             owned,
             send: vec![],
             ghosts: vec![],
@@ -180,15 +192,17 @@ impl<E: Exchange> Domain<E> {
             leads: false,
             owned_kept: false,
         };
-        d.regroup();
+        d.regroup()?;
         d.forces()?;
         d.leads = d.ex.rank() == 0;
         Ok(d)
     }
 
     /// Chooses the ghosts again: each rank's atoms near another's brick are sent there, and the
-    /// local graph is made of the owned atoms and the ghosts received.
-    fn regroup(&mut self) {
+    /// local graph is made of the owned atoms and the ghosts received, with the pair terms and
+    /// the bonded instances of the owned atoms. Fails on every rank if an instance's atom is not
+    /// among a rank's (it stretched beyond the halo).
+    fn regroup(&mut self) -> Result<(), String> {
         let (me, n) = (self.ex.rank(), self.owned.len());
         let mut send = vec![vec![]; self.ex.size()];
         for (k, &x) in self.local.x[..n].iter().enumerate() {
@@ -213,9 +227,32 @@ impl<E: Exchange> Domain<E> {
         self.since = self.local.x[..n].to_vec();
         // the same bodies in the same places keep their graph, and its neighbour list, which
         // rebuilds itself as the bodies move: on one rank, the one-process run's bits
-        if ghosts != self.ghosts || !self.owned_kept {
+        let rebuild = ghosts != self.ghosts || !self.owned_kept;
+        let place: std::collections::HashMap<usize, usize> =
+            self.owned.iter().chain(&ghosts).enumerate().map(|(k, &i)| (i, k)).collect();
+        let bonded = self.bonded.local(&self.owned, &place);
+        let mut apart = [bonded.as_ref().map_or(1.0, |_| 0.0)];
+        self.talk(|ex| ex.max(&mut apart));
+        let bonded = match (bonded, apart[0]) {
+            (Ok(b), 0.0) => b,
+            (Err([i, j]), _) => {
+                return Err(format!(
+                    "atoms {i} and {j} of a bonded term lie beyond the domains' halo ({:.4}) at step {}: it \
+                     stretched further than the domains allow (1.5 × its span at the start, or a FENE bond's R0)",
+                    self.halo, self.step
+                ))
+            }
+            (Ok(_), _) => {
+                return Err(format!(
+                    "another rank's bonded term stretched beyond the domains' halo ({:.4}) at step {} (it says which on its stderr)",
+                    self.halo, self.step
+                ))
+            }
+        };
+        if rebuild {
             let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.bodies[i].clone()).collect();
-            self.graph = LagrangianGraph::with_pool(&Model { bodies, ..self.model.clone() }, self.pool.clone());
+            let terms = self.model.terms.iter().cloned().chain(bonded).collect();
+            self.graph = LagrangianGraph::with_pool(&Model { bodies, terms, ..self.model.clone() }, self.pool.clone());
         }
         self.owned_kept = true;
         self.send = send;
@@ -223,6 +260,7 @@ impl<E: Exchange> Domain<E> {
         self.tally.regroups += 1;
         self.tally.ghosts += self.ghosts.len() as u64;
         self.tally.owned += n as u64;
+        Ok(())
     }
 
     /// Moves each atom that left this rank's brick to its owner; keeps the owned in number order.
@@ -291,7 +329,7 @@ impl<E: Exchange> Domain<E> {
         if far[0] > 0.25 * skin * skin {
             let t = Instant::now();
             self.migrate();
-            self.regroup();
+            self.regroup()?;
             self.tally.regrouping += t.elapsed().as_secs_f64();
         } else {
             self.share_positions();

@@ -22,6 +22,27 @@ fn liquid(steps: u64) -> Scene {
     liquid_of(6, steps)
 }
 
+/// The liquid with the first two atoms of every fcc cell bonded (1.19 apart, at rest length)
+/// and an angle at the first between the second and third: 1,728 bonds and angles, many across
+/// bricks.
+fn bonded_liquid(steps: u64, k: f64) -> Scene {
+    use lagra_checker::model::TermInstance;
+    use lagra_checker::terms::Kind;
+    let mut scene = liquid_of(12, steps);
+    let cells = scene.x0.len() / 4;
+    for c in 0..cells {
+        let (a, b, d) = (4 * c, 4 * c + 1, 4 * c + 2);
+        let bond = TermInstance { kind: Kind::HarmonicBond, sites: vec![a, b], params: vec![k, 1.188, 0.0] };
+        let angle = TermInstance {
+            kind: Kind::HarmonicAngle,
+            sites: vec![b, a, d],
+            params: vec![2.0, std::f64::consts::FRAC_PI_3],
+        };
+        scene.model.terms.extend([bond, angle]);
+    }
+    scene
+}
+
 /// The run on `ranks` threads standing for ranks (rank 0's run loop driving), its report and
 /// how often rank 0 chose its ghosts.
 fn in_domains(scene: &Scene, ranks: usize, grid: Option<&str>, threads: usize) -> (Report, u64) {
@@ -113,13 +134,17 @@ fn what_the_domains_do_not_carry_is_said() {
     )
     .unwrap();
     assert!(fits(&open).unwrap_err().contains("no box periodic"));
-    let mut bonded = liquid(10);
-    bonded.model.terms.push(lagra_checker::model::TermInstance {
-        kind: lagra_checker::terms::Kind::HarmonicBond,
-        sites: vec![0, 1],
-        params: vec![1.0, 1.0, 0.0],
-    });
-    assert!(fits(&bonded).unwrap_err().contains("HarmonicBond"), "{:?}", fits(&bonded));
+    let with = |kind, sites: Vec<usize>, params: Vec<f64>| {
+        let mut scene = liquid(10);
+        scene.model.terms.push(lagra_checker::model::TermInstance { kind, sites, params });
+        fits(&scene)
+    };
+    use lagra_checker::terms::Kind;
+    let field = with(Kind::UniformAcceleration, vec![], vec![0.0, -1.0, 0.0]);
+    assert!(field.as_ref().unwrap_err().contains("UniformAcceleration"), "{field:?}");
+    let damped = with(Kind::HarmonicBond, vec![0, 1], vec![1.0, 1.0, 0.5]);
+    assert!(damped.as_ref().unwrap_err().contains("depends on the velocities"), "{damped:?}");
+    assert!(with(Kind::HarmonicBond, vec![0, 1], vec![1.0, 1.0, 0.0]).is_ok());
     assert!(fits(&liquid(10)).is_ok());
 }
 
@@ -160,4 +185,40 @@ fn every_step_each_owned_atom_feels_the_force_of_the_whole_system() {
         }
         assert!(d.tally.regroups > 2, "{}", d.tally.regroups);
     });
+}
+
+#[test]
+fn bonds_and_angles_across_bricks_follow_the_one_process_run_to_round_off() {
+    let scene = bonded_liquid(60, 50.0);
+    let alone = run(&scene, Options::plain(None)).unwrap();
+    assert!(passed(&alone));
+    for ranks in [2, 4] {
+        let (rep, _) = in_domains(&scene, ranks, None, 1);
+        assert!(passed(&rep), "{ranks} ranks: {:?}", rep.outcome.verdicts);
+        let dx = largest_difference(&rep.state.x, &alone.state.x);
+        assert!(dx < 1e-10, "{ranks} ranks: |Δx| {dx:e}");
+    }
+    // a bond's atoms both owned elsewhere is no rank's twice: the one-rank run is the same bits
+    let mut d = Domain::new(Alone, &scene, &lagra_kernel::setup::start(&scene), None, 1).unwrap();
+    let one = run(&scene, Options { shared: Some(&mut d), ..Options::plain(None) }).unwrap();
+    assert_eq!(differing(&one.state, &alone.state), 0);
+}
+
+#[test]
+fn a_bond_stretched_beyond_the_halo_stops_every_rank_with_its_atoms_named() {
+    // a bond whose rest length is ten times its length at the start pushes its atoms apart
+    let mut scene = bonded_liquid(200, 50.0);
+    scene.model.terms.push(lagra_checker::model::TermInstance {
+        kind: lagra_checker::terms::Kind::HarmonicBond,
+        sites: vec![0, 1],
+        params: vec![100.0, 11.88, 0.0],
+    });
+    scene.claims.clear();
+    let (rep, _) = in_domains(&scene, 2, None, 1);
+    match rep.stop {
+        Some(crate::run::Stop::Solver { message, .. }) => {
+            assert!(message.contains("bonded term") && message.contains("halo"), "{message}")
+        }
+        s => panic!("the run went on: {s:?}"),
+    }
 }
