@@ -147,6 +147,49 @@ impl lagra_run::domains::exchange::Exchange for Collectives {
         use mpi::traits::{Communicator, Root};
         self.0.process_at_rank(0).broadcast_into(x);
     }
+
+    /// MPI_Isend and MPI_Irecv with the peers alone: the counts, then the numbers (each pair of
+    /// ranks' messages arrive in the order sent, so one tag a kind serves every exchange).
+    fn swap(&self, peers: &[usize], out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        use mpi::traits::{Communicator, Destination, Source};
+        const COUNT: mpi::Tag = 41;
+        const NUMBERS: mpi::Tag = 42;
+        let at = |p: usize| self.0.process_at_rank(p as mpi::Rank);
+        let sent: Vec<u64> = out.iter().map(|o| o.len() as u64).collect();
+        let mut counts = vec![0u64; peers.len()];
+        mpi::request::scope(|scope| {
+            let got: Vec<_> = counts
+                .iter_mut()
+                .zip(peers)
+                .map(|(c, &p)| at(p).immediate_receive_into_with_tag(scope, c, COUNT))
+                .collect();
+            let gone: Vec<_> =
+                sent.iter().zip(peers).map(|(c, &p)| at(p).immediate_send_with_tag(scope, c, COUNT)).collect();
+            got.into_iter().for_each(|r| {
+                r.wait();
+            });
+            gone.into_iter().for_each(|r| {
+                r.wait();
+            });
+        });
+        let mut back: Vec<Vec<f64>> = counts.iter().map(|&n| vec![0.0; n as usize]).collect();
+        mpi::request::scope(|scope| {
+            let got: Vec<_> = back
+                .iter_mut()
+                .zip(peers)
+                .map(|(b, &p)| at(p).immediate_receive_into_with_tag(scope, &mut b[..], NUMBERS))
+                .collect();
+            let gone: Vec<_> =
+                out.iter().zip(peers).map(|(o, &p)| at(p).immediate_send_with_tag(scope, &o[..], NUMBERS)).collect();
+            got.into_iter().for_each(|r| {
+                r.wait();
+            });
+            gone.into_iter().for_each(|r| {
+                r.wait();
+            });
+        });
+        back
+    }
 }
 
 /// MPI_Gather of the lengths, then MPI_Gatherv of the bytes.

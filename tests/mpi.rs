@@ -144,6 +144,23 @@ fn a_liquid_cut_into_domains_on_two_and_four_ranks_is_certified_and_rechecked_fr
             frames.lines().map(|l| serde_json::from_str::<Value>(l).unwrap()["energy"].as_f64().unwrap()).collect();
         assert_eq!(energies.len(), 7, "a frame every 10 steps (the default), and the first");
         assert!(energies.iter().all(|e| (e / energies[0] - 1.0).abs() < 1e-3), "{energies:?}");
+        // every state within round-off of the one-process run's (the pair forces summed in
+        // another order), the first the same
+        let alone = dir.path().join("alone.states");
+        let o = lagra(&["run", scene.to_str().unwrap(), "--quiet", "--states", alone.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let read = |p: &Path| lagra_checker::states::States::read(std::fs::read(p).unwrap()).unwrap();
+        let (shared, one) = (read(&states), read(&alone));
+        assert_eq!(shared.count, one.count);
+        let off = shared
+            .iter()
+            .zip(one.iter())
+            .flat_map(|(a, b)| {
+                let (a, b): (Vec<f64>, Vec<f64>) = (a.x.concat(), b.x.concat());
+                a.into_iter().zip(b).map(|(p, q)| (p - q).abs()).collect::<Vec<_>>()
+            })
+            .fold(0.0, f64::max);
+        assert!(off > 0.0 && off < 1e-10, "{ranks} ranks: positions off by {off:e}");
         // re-checked by one process, every state's enclosures evaluated again
         let c = lagra(&[
             "check",

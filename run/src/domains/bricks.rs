@@ -89,6 +89,27 @@ impl Bricks {
         k[0] + self.counts[0] * (k[1] + self.counts[1] * k[2])
     }
 
+    /// The ranks whose bricks touch `rank`'s, across faces, edges and corners (through the
+    /// periodic box), ascending, without `rank`: where its ghosts and migrants can go, since a
+    /// brick is at least a halo wide.
+    pub fn peers(&self, rank: usize) -> Vec<usize> {
+        let p = self.counts;
+        let k = [rank % p[0], rank / p[0] % p[1], rank / (p[0] * p[1])];
+        let mut peers = vec![];
+        for dz in [p[2] - 1, 0, 1] {
+            for dy in [p[1] - 1, 0, 1] {
+                for dx in [p[0] - 1, 0, 1] {
+                    let d = [dx, dy, dz];
+                    peers.push(self.rank_of([0, 1, 2].map(|a| (k[a] + d[a]) % p[a])));
+                }
+            }
+        }
+        peers.sort_unstable();
+        peers.dedup();
+        peers.retain(|&r| r != rank);
+        peers
+    }
+
     /// The rank that owns a point.
     pub fn owner(&self, x: [f64; 3]) -> usize {
         self.rank_of([0, 1, 2].map(|a| self.index(a, x[a])))
@@ -146,6 +167,16 @@ mod tests {
     }
 
     #[test]
+    fn a_brick_has_up_to_26_peers_each_once() {
+        let b = |counts| Bricks { counts, size: [30.0; 3] };
+        assert_eq!(b([3, 3, 3]).peers(13).len(), 26);
+        assert_eq!(b([2, 1, 1]).peers(0), [1]);
+        assert_eq!(b([2, 2, 1]).peers(3), [0, 1, 2]);
+        assert_eq!(b([4, 1, 1]).peers(0), [1, 3]);
+        assert!(b([1, 1, 1]).peers(0).is_empty());
+    }
+
+    #[test]
     fn too_many_ranks_for_the_box_is_said() {
         let e = Bricks::chosen(64, [10.0; 3], 2.8).unwrap_err();
         assert!(e.contains("64 ranks cannot share") && e.contains("3 × 3 × 3"), "{e}");
@@ -174,6 +205,10 @@ mod tests {
             sorted.sort();
             sorted.dedup();
             prop_assert_eq!(sorted.len(), near.len());
+            // every rank near the point other than its owner is a peer of the owner's, and back
+            let peers = b.peers(owner);
+            prop_assert!(near.iter().all(|r| *r == owner || peers.contains(r)));
+            prop_assert!(peers.iter().all(|&r| b.peers(r).contains(&owner)));
             // a point a little less than the halo away falls in a rank listed as near
             let n = (step[0] * step[0] + step[1] * step[1] + step[2] * step[2]).sqrt().max(1e-9);
             let y = [0, 1, 2].map(|a| x[a] + step[a] / n * halo * 0.999);

@@ -1,5 +1,5 @@
-//! What the domains say to each other: three collectives, enough for ghosts, migration, the
-//! step's agreement and the gather. MPI provides them in the binary (`src/ranks.rs`, the `mpi`
+//! What the domains say to each other: three collectives and an exchange among neighbours,
+//! enough for ghosts, migration, the step's agreement and the gather. MPI provides them in the binary (`src/ranks.rs`, the `mpi`
 //! feature); `Alone` is one rank; `Threads` (tests) runs the ranks as threads of one process,
 //! so the decomposition is tested without MPI.
 
@@ -14,6 +14,15 @@ pub trait Exchange {
     fn max(&self, x: &mut [f64]);
     /// Rank 0's value, on every rank.
     fn broadcast(&self, x: &mut u64);
+    /// Sends `out[k]` to rank `peers[k]` and returns what each peer sent here, in the same
+    /// order: an exchange among neighbours only, every rank's `peers` naming it back. By
+    /// default through `all_to_all`; MPI's sends and receives only to the peers.
+    fn swap(&self, peers: &[usize], out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        let mut all = vec![vec![]; self.size()];
+        peers.iter().zip(out).for_each(|(&p, o)| all[p] = o);
+        let mut got = self.all_to_all(all);
+        peers.iter().map(|&p| std::mem::take(&mut got[p])).collect()
+    }
 }
 
 /// A job of one rank.

@@ -106,7 +106,11 @@ pub struct Domain<E: Exchange> {
     bonded: Bonded,
     /// The atoms this rank owns, by number, ascending.
     owned: Vec<usize>,
-    /// For each rank, the places in `owned` of the atoms it takes as ghosts.
+    /// The ranks whose bricks touch this one's (`Bricks::peers`), and each rank's place among
+    /// them (`usize::MAX` for the others): every exchange but the gather is with these.
+    peers: Vec<usize>,
+    peer_at: Vec<usize>,
+    /// For each peer, the places in `owned` of the atoms it takes as ghosts.
     send: Vec<Vec<usize>>,
     /// The ghosts' numbers, in their places after the owned atoms.
     ghosts: Vec<usize>,
@@ -180,6 +184,8 @@ impl<E: Exchange> Domain<E> {
             bodies,
             bonded,
             owned,
+            peers: vec![],
+            peer_at: vec![],
             send: vec![],
             ghosts: vec![],
             local,
@@ -192,6 +198,9 @@ impl<E: Exchange> Domain<E> {
             leads: false,
             owned_kept: false,
         };
+        d.peers = d.bricks.peers(me);
+        d.peer_at = vec![usize::MAX; d.ex.size()];
+        d.peers.iter().enumerate().for_each(|(k, &r)| d.peer_at[r] = k);
         d.regroup()?;
         d.forces()?;
         d.leads = d.ex.rank() == 0;
@@ -204,11 +213,11 @@ impl<E: Exchange> Domain<E> {
     /// among a rank's (it stretched beyond the halo).
     fn regroup(&mut self) -> Result<(), String> {
         let (me, n) = (self.ex.rank(), self.owned.len());
-        let mut send = vec![vec![]; self.ex.size()];
+        let mut send = vec![vec![]; self.peers.len()];
         for (k, &x) in self.local.x[..n].iter().enumerate() {
             self.bricks.near(x, self.halo, |r| {
                 if r != me {
-                    send[r].push(k)
+                    send[self.peer_at[r]].push(k)
                 }
             });
         }
@@ -216,7 +225,7 @@ impl<E: Exchange> Domain<E> {
             .iter()
             .map(|s| s.iter().flat_map(|&k| with_number(self.owned[k], self.local.x[k])).collect())
             .collect();
-        let got = self.talk(|ex| ex.all_to_all(out));
+        let got = self.talk(|ex, peers| ex.swap(peers, out));
         let ghosts: Vec<usize> = got.iter().flat_map(|g| g.chunks_exact(4)).map(|g| g[0] as usize).collect();
         self.local.x.truncate(n);
         self.local.x.extend(got.iter().flat_map(|g| g.chunks_exact(4)).map(|g| [g[1], g[2], g[3]]));
@@ -232,7 +241,7 @@ impl<E: Exchange> Domain<E> {
             self.owned.iter().chain(&ghosts).enumerate().map(|(k, &i)| (i, k)).collect();
         let bonded = self.bonded.local(&self.owned, &place);
         let mut apart = [bonded.as_ref().map_or(1.0, |_| 0.0)];
-        self.talk(|ex| ex.max(&mut apart));
+        self.talk(|ex, _| ex.max(&mut apart));
         let bonded = match (bonded, apart[0]) {
             (Ok(b), 0.0) => b,
             (Err([i, j]), _) => {
@@ -266,15 +275,17 @@ impl<E: Exchange> Domain<E> {
     /// Moves each atom that left this rank's brick to its owner; keeps the owned in number order.
     fn migrate(&mut self) {
         let (me, n) = (self.ex.rank(), self.owned.len());
-        let mut out = vec![vec![]; self.ex.size()];
+        let mut out = vec![vec![]; self.peers.len()];
         let mut kept = vec![];
         for k in 0..n {
             match self.bricks.owner(self.local.x[k]) {
                 r if r == me => kept.push(k),
-                r => out[r].extend(with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k])),
+                // an atom moves less than half the skin between two moves: to a peer
+                r => out[self.peer_at[r]]
+                    .extend(with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k])),
             }
         }
-        let got = self.talk(|ex| ex.all_to_all(out));
+        let got = self.talk(|ex, peers| ex.swap(peers, out));
         let mut atoms: Vec<(usize, [f64; 3], [f64; 3])> =
             kept.iter().map(|&k| (self.owned[k], self.local.x[k], self.local.v[k])).collect();
         atoms.extend(
@@ -292,7 +303,7 @@ impl<E: Exchange> Domain<E> {
     fn share_positions(&mut self) {
         let n = self.owned.len();
         let out = self.send.iter().map(|s| s.iter().flat_map(|&k| self.local.x[k]).collect()).collect();
-        let got = self.talk(|ex| ex.all_to_all(out));
+        let got = self.talk(|ex, peers| ex.swap(peers, out));
         for (slot, x) in self.local.x[n..].iter_mut().zip(got.iter().flat_map(|g| g.chunks_exact(3))) {
             *slot = [x[0], x[1], x[2]];
         }
@@ -307,7 +318,7 @@ impl<E: Exchange> Domain<E> {
         }
         // the lowest failing rank, as the largest −rank
         let mut failed = [mine.as_ref().map_or(-(self.ex.rank() as f64), |_| f64::NEG_INFINITY)];
-        self.talk(|ex| ex.max(&mut failed));
+        self.talk(|ex, _| ex.max(&mut failed));
         match (mine, failed[0]) {
             (_, f64::NEG_INFINITY) => Ok(()),
             (Err(e), _) => Err(e.to_string()),
@@ -324,7 +335,7 @@ impl<E: Exchange> Domain<E> {
         kick_drift(&mut l.x[..n], &mut l.v[..n], &mut self.f[..n], &self.inverse, (h, self.dt), false, spread);
         let moved = l.x[..n].iter().zip(&self.since).map(|(x, s)| dist2(x, s)).fold(0.0, f64::max);
         let mut far = [moved];
-        self.talk(|ex| ex.max(&mut far));
+        self.talk(|ex, _| ex.max(&mut far));
         let skin = self.halo - self.reach;
         if far[0] > 0.25 * skin * skin {
             let t = Instant::now();
@@ -357,7 +368,7 @@ impl<E: Exchange> Domain<E> {
         out[0] = (0..n)
             .flat_map(|k| with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k]))
             .collect();
-        let got = self.talk(|ex| ex.all_to_all(out));
+        let got = self.talk(|ex, _| ex.all_to_all(out));
         if let Some(s) = whole {
             for a in got.iter().flat_map(|g| g.chunks_exact(7)) {
                 let i = a[0] as usize;
@@ -381,9 +392,9 @@ impl<E: Exchange> Domain<E> {
         }
     }
 
-    fn talk<T>(&mut self, say: impl FnOnce(&E) -> T) -> T {
+    fn talk<T>(&mut self, say: impl FnOnce(&E, &[usize]) -> T) -> T {
         let t = Instant::now();
-        let r = say(&self.ex);
+        let r = say(&self.ex, &self.peers);
         self.tally.talking += t.elapsed().as_secs_f64();
         r
     }
