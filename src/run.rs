@@ -399,7 +399,7 @@ pub fn main(a: Args) -> ExitCode {
 enum Sharing {
     Alone(Option<String>),
     #[cfg(feature = "mpi")]
-    Domains(lagra_run::domains::Domain<crate::ranks::Collectives>),
+    Domains(Box<lagra_run::domains::Domain<crate::ranks::Collectives>>),
 }
 
 impl Sharing {
@@ -424,7 +424,8 @@ impl Sharing {
         #[cfg(feature = "mpi")]
         if let Some(c) = world.collectives() {
             let start = lagra_kernel::setup::start(scene);
-            return lagra_run::domains::Domain::new(c, scene, &start, a.grid.as_deref(), threads).map(Sharing::Domains);
+            return lagra_run::domains::Domain::new(c, scene, &start, a.grid.as_deref(), threads)
+                .map(|d| Sharing::Domains(Box::new(d)));
         }
         let _ = threads;
         Ok(whole("this lagra was built without MPI".into()))
@@ -452,7 +453,7 @@ impl Sharing {
         match self {
             Sharing::Alone(_) => None,
             #[cfg(feature = "mpi")]
-            Sharing::Domains(d) => Some(d),
+            Sharing::Domains(d) => Some(d.as_mut()),
         }
     }
 }
