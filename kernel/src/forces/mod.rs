@@ -129,6 +129,9 @@ pub trait Force: Send + Sync {
     /// `energy` (0 if not: a step no one looks at needs only the forces).
     fn accumulate(&self, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity>;
     /// Whether the force depends on velocities (the solver then iterates its closing kick).
+    /// Bodies `first..` are ghosts whose forces the caller drops: a group may leave out the
+    /// pairs among them (`Neighbours::leave_out_pairs_among`).
+    fn leave_out_pairs_among(&self, _first: usize) {}
     fn velocity_dependent(&self) -> bool;
     /// Whether the group's force only turns velocities, F = m ω × v (a magnetic field), so that
     /// a solver may rotate by ω instead of kicking (Boris).

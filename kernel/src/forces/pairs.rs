@@ -308,6 +308,12 @@ fn colour<T: Paired>(s: &Frame, i: usize, j: usize) -> f64 {
 }
 
 impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
+    fn leave_out_pairs_among(&self, first: usize) {
+        if let Some(l) = &self.list {
+            l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).leave_out_pairs_among(first);
+        }
+    }
+
     fn stride(&self, stride: Stride, parts: Parts) -> Result<(), Singularity> {
         stride_alone(self, stride, parts)
     }

@@ -93,6 +93,9 @@ pub struct Neighbours {
     pub builds: u64,
     /// Wall time on the calling thread in the list's passes (`--explain`).
     pub spent: Spent,
+    /// Bodies from this one on are ghosts, whose forces the caller drops: a cluster pair with
+    /// only ghosts in both is left out (`leave_out_pairs_among`).
+    ghosts_from: usize,
 }
 
 /// Where a list's time went, as the calling thread's wall clock sees it: the builds, the part
@@ -136,6 +139,7 @@ impl Neighbours {
             pieces: Pieces::default(),
             builds: 0,
             spent: Spent::default(),
+            ghosts_from: usize::MAX,
         })
     }
 
@@ -216,6 +220,15 @@ impl Neighbours {
     }
 
     /// Builds the list at positions `x` (a restart's `built_at`, or the state's).
+    /// Bodies `first..` are ghosts (a domain's copies of another rank's atoms, `lagra_run::domains`):
+    /// from the next build, pairs between clusters that hold only ghosts are not listed. The
+    /// forces on the other bodies are the same sums (in another order where the pieces, cut by
+    /// size, fall differently); the forces on ghosts and the potential energy leave them out.
+    pub fn leave_out_pairs_among(&mut self, first: usize) {
+        self.ghosts_from = first;
+        self.at.clear();
+    }
+
     pub fn build(&mut self, x: &[[f64; 3]], cell: &Option<Cell>, pool: Option<&ThreadPool>) {
         let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
         self.at = each(spread, x.len(), |i| x[i]);
@@ -244,6 +257,12 @@ impl Neighbours {
             let slots = &bodies[LANES * c..LANES * (c + 1)];
             Bounds::of(slots.iter().filter(|&&b| b != EMPTY).map(|&b| &wrapped[b as usize]))
         });
+        let ghostly = (self.ghosts_from < x.len()).then(|| {
+            let g = self.ghosts_from;
+            each(spread, bodies.len() / LANES, |c| {
+                bodies[LANES * c..LANES * (c + 1)].iter().all(|&b| b == EMPTY || b as usize >= g)
+            })
+        });
         let search = Search {
             columns: &columns,
             first: &first,
@@ -251,6 +270,7 @@ impl Neighbours {
             x: &self.x,
             shifts: &self.shifts,
             r: self.reach + self.skin,
+            ghostly: ghostly.as_deref(),
         };
         let n = boxes.len();
         // in parts, each listed on its own and joined in order: the same list as one pass makes;

@@ -184,6 +184,9 @@ pub(super) struct Search<'a> {
     pub(super) x: &'a [Cluster],
     pub(super) shifts: &'a [[f64; 3]; 32],
     pub(super) r: f64,
+    /// The clusters whose bodies are all ghosts (`Neighbours::leave_out_pairs_among`), if any
+    /// are: no pair of two of them is listed.
+    pub(super) ghostly: Option<&'a [bool]>,
 }
 
 impl Search<'_> {
@@ -305,9 +308,10 @@ impl Search<'_> {
                     let to = *to + base;
                     let mut end = out.len();
                     out.resize(end + to.saturating_sub(from), Pair(0));
+                    let ghost = self.ghostly.filter(|g| g[ic]);
                     for jc in from..to {
                         out[end] = Pair::new(jc, image);
-                        end += usize::from(self.touch(ic, jc, s));
+                        end += usize::from(self.touch(ic, jc, s) && !ghost.is_some_and(|g| g[jc]));
                     }
                     out.truncate(end);
                 }

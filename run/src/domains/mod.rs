@@ -262,6 +262,8 @@ impl<E: Exchange> Domain<E> {
             let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.bodies[i].clone()).collect();
             let terms = self.model.terms.iter().cloned().chain(bonded).collect();
             self.graph = LagrangianGraph::with_pool(&Model { bodies, terms, ..self.model.clone() }, self.pool.clone());
+            // pairs between ghosts give no owned atom a force
+            self.graph.leave_out_pairs_among(n);
         }
         self.owned_kept = true;
         self.send = send;
