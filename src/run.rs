@@ -418,12 +418,13 @@ impl Sharing {
         if let Err(why) = lagra_run::domains::fits(scene) {
             return Ok(whole(format!("the scene is not cut into domains: {why}")));
         }
-        if a.restart.is_some() || a.resume.is_some() {
-            return Ok(whole("a run in domains neither writes nor reads restart files yet".into()));
-        }
         #[cfg(feature = "mpi")]
         if let Some(c) = world.collectives() {
-            let start = lagra_kernel::setup::start(scene);
+            // every rank reads a restart's state (a file every rank can read, as a sweep's --out)
+            let start = match &a.resume {
+                Some(p) => Restart::read(p).map_err(|e| format!("--resume: {e}"))?.state,
+                None => lagra_kernel::setup::start(scene),
+            };
             return lagra_run::domains::Domain::new(c, scene, &start, a.grid.as_deref(), threads)
                 .map(|d| Sharing::Domains(Box::new(d)));
         }

@@ -186,3 +186,26 @@ fn a_grid_that_does_not_fit_the_job_is_said_once_and_ends_it() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("under mpirun"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_run_stopped_on_two_ranks_resumes_on_four_and_its_segments_recheck_as_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = liquid(dir.path());
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let s = scene.to_str().unwrap();
+    let first =
+        mpirun(2, &["run", s, "--quiet", "--until", "30", "--restart", &at("r.bin"), "--certificate", &at("c1.json")]);
+    // (stopped at 30: the claim checked at 40 and 60 not yet due)
+    assert!(matches!(first.status.code(), Some(0 | 1)), "{}", stderr(&first));
+    assert!(!stderr(&first).contains("runs the scene whole"), "{}", stderr(&first));
+    let second = mpirun(4, &["run", s, "--json", "--resume", &at("r.bin"), "--certificate", &at("c2.json")]);
+    assert_eq!(second.status.code(), Some(0), "{}", stderr(&second));
+    let report: Value = serde_json::from_str(&stdout(&second)).unwrap();
+    assert_eq!(report["passed"], true);
+    assert_eq!(report["steps"], 60);
+    let c = lagra(&["check", &at("c1.json"), &at("c2.json"), "--scene", s]);
+    assert_eq!(c.status.code(), Some(0), "{}{}", stdout(&c), stderr(&c));
+    // and the same restart goes on in one process
+    let alone = lagra(&["run", s, "--quiet", "--resume", &at("r.bin")]);
+    assert_eq!(alone.status.code(), Some(0), "{}", stderr(&alone));
+}

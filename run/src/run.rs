@@ -12,7 +12,7 @@ use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
 use lagra_checker::terms::Kind;
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::solvers::{Evaluated, Iterations, Stepper};
+use lagra_kernel::solvers::{Carried, Evaluated, Iterations, Stepper};
 use lagra_kernel::state::{kinetic, State};
 use lagra_lang::prediction::Prediction;
 use lagra_lang::scene::Scene;
@@ -212,11 +212,17 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let end = opts.until.map_or(steps, |u| u.min(steps));
     let mut restarts = opts.restarts.take();
     let mut shared = opts.shared.take();
-    if shared.is_some() && (!meters.is_empty() || observer.is_some() || restarts.is_some() || carried.is_some()) {
-        return Err(
-            "a run in domains measures no prediction or observable and neither reads nor writes restarts".into()
-        );
+    if shared.is_some() && (!meters.is_empty() || observer.is_some()) {
+        return Err("a run in domains measures no prediction or observable".into());
     }
+    // What goes on from the state reached. In domains rank 0 has the state, not its forces: they
+    // are evaluated whole here, as a run in one process stopped there would have them, so that
+    // a restart made on some ranks resumes on any number, or in one process.
+    let in_domains = shared.is_some();
+    let solver_carries = |solver: &Stepper, s: &State| match in_domains {
+        true => Evaluated::at(&graph, s).map(|at| Carried::forces(&at)).map_err(|e| e.to_string()),
+        false => solver.carried(),
+    };
     let every_restart = restarts.as_ref().map_or(u64::MAX, |r| r.every.max(1));
     let tracing = opts.trace.is_some();
     // (a restart made on the way takes the monitor from the kernel's thread)
@@ -291,7 +297,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     };
                 match &carried {
                     Some(c) => {
-                        solver.take_up(c, &graph).map_err(|e| format!("the restart: {e}"))?;
+                        // (in domains the ranks evaluated the restart's state afresh)
+                        if shared.is_none() {
+                            solver.take_up(c, &graph).map_err(|e| format!("the restart: {e}"))?;
+                        }
                         check(&mut checking, &mut state, false)?;
                     }
                     None => {
@@ -357,7 +366,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         let made = carry(
                             &state,
                             (scene, steps),
-                            solver.carried(),
+                            solver_carries(&solver, &state),
                             &graph,
                             checking.carried(),
                             &observer,
@@ -375,7 +384,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 iterations = solver.iterations().cloned();
                 solver_plan = shared.as_ref().map_or_else(|| solver.plan(), |d| Some(d.plan()));
                 if restarts.is_some() {
-                    solver_carried = solver.carried();
+                    solver_carried = solver_carries(&solver, &state);
                 }
             }
         }

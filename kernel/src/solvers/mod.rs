@@ -120,7 +120,8 @@ pub struct Carried {
 }
 
 impl Carried {
-    pub(crate) fn forces(at: &Evaluated) -> Carried {
+    /// What velocity Verlet carries: the forces and potential at the state.
+    pub fn forces(at: &Evaluated) -> Carried {
         Carried { forces: at.f.clone(), potential: at.potential, warm: vec![], stiffness: vec![] }
     }
     pub(crate) fn evaluated(&self) -> Evaluated {

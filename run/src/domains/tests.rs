@@ -222,3 +222,46 @@ fn a_bond_stretched_beyond_the_halo_stops_every_rank_with_its_atoms_named() {
         s => panic!("the run went on: {s:?}"),
     }
 }
+
+#[test]
+fn a_restart_made_on_two_ranks_goes_on_on_three_or_in_one_process() {
+    use crate::run::Restarts;
+    let scene = liquid_of(12, 60);
+    let alone = run(&scene, Options::plain(None)).unwrap();
+    // 30 steps on two ranks, the restart made where --until stops the run
+    let s0 = lagra_kernel::setup::start(&scene);
+    let restart = std::thread::scope(|scope| {
+        let mut job = Threads::job(2).into_iter();
+        let root = job.next().unwrap();
+        let (scene, s0) = (&scene, &s0);
+        scope.spawn(move || Domain::new(job.next().unwrap(), scene, s0, None, 1).unwrap().follow());
+        let mut d = Domain::new(root, scene, s0, None, 1).unwrap();
+        let mut write = |_| Ok(());
+        let restarts = Some(Restarts { every: u64::MAX, write: &mut write });
+        let opts = Options { shared: Some(&mut d), until: Some(30), restarts, ..Options::plain(None) };
+        run(scene, opts).unwrap().restart.unwrap().unwrap()
+    });
+    assert_eq!(restart.state.step, 30);
+    let file = tempfile::NamedTempFile::new().unwrap();
+    restart.write(file.path()).unwrap();
+    let read = || crate::restart::Restart::read(file.path()).unwrap();
+    // on three ranks, from its state
+    let on_three = std::thread::scope(|scope| {
+        let mut job = Threads::job(3).into_iter();
+        let root = job.next().unwrap();
+        let (scene, s) = (&scene, &restart.state);
+        for ex in job {
+            scope.spawn(move || Domain::new(ex, scene, s, Some("1x3x1"), 1).unwrap().follow());
+        }
+        let mut d = Domain::new(root, scene, s, Some("1x3x1"), 1).unwrap();
+        run(scene, Options { shared: Some(&mut d), resume: Some(read()), ..Options::plain(None) }).unwrap()
+    });
+    // and in one process, which takes up the forces rank 0 evaluated whole
+    let in_one = run(&scene, Options { resume: Some(read()), ..Options::plain(None) }).unwrap();
+    for (name, rep) in [("three ranks", &on_three), ("one process", &in_one)] {
+        assert_eq!(rep.steps, 60, "{name}");
+        assert!(passed(rep), "{name}: {:?}", rep.outcome.verdicts);
+        let dx = largest_difference(&rep.state.x, &alone.state.x);
+        assert!(dx < 1e-10, "{name}: |Δx| {dx:e} from the uninterrupted run");
+    }
+}
