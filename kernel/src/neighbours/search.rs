@@ -308,10 +308,20 @@ impl Search<'_> {
                     let to = *to + base;
                     let mut end = out.len();
                     out.resize(end + to.saturating_sub(from), Pair(0));
-                    let ghost = self.ghostly.filter(|g| g[ic]);
-                    for jc in from..to {
-                        out[end] = Pair::new(jc, image);
-                        end += usize::from(self.touch(ic, jc, s) && !ghost.is_some_and(|g| g[jc]));
+                    match self.ghostly.filter(|g| g[ic]) {
+                        None => {
+                            for jc in from..to {
+                                out[end] = Pair::new(jc, image);
+                                end += usize::from(self.touch(ic, jc, s));
+                            }
+                        }
+                        // (a loop of its own: the one above, every list's, stays as it was)
+                        Some(ghostly) => {
+                            for jc in from..to {
+                                out[end] = Pair::new(jc, image);
+                                end += usize::from(self.touch(ic, jc, s) && !ghostly[jc]);
+                            }
+                        }
                     }
                     out.truncate(end);
                 }
