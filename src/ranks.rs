@@ -148,6 +148,14 @@ impl lagra_run::domains::exchange::Exchange for Collectives {
         self.0.process_at_rank(0).broadcast_into(x);
     }
 
+    /// MPI_Allgather.
+    fn all_gather(&self, mine: &[f64]) -> Vec<f64> {
+        use mpi::traits::{Communicator, CommunicatorCollectives};
+        let mut all = vec![0.0; mine.len() * self.0.size() as usize];
+        self.0.all_gather_into(mine, &mut all[..]);
+        all
+    }
+
     /// MPI_Isend and MPI_Irecv with the peers alone: the counts, then the numbers (each pair of
     /// ranks' messages arrive in the order sent, so one tag a kind serves every exchange).
     fn swap(&self, peers: &[usize], out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {

@@ -209,3 +209,88 @@ fn a_run_stopped_on_two_ranks_resumes_on_four_and_its_segments_recheck_as_one() 
     let alone = lagra(&["run", s, "--quiet", "--resume", &at("r.bin")]);
     assert_eq!(alone.status.code(), Some(0), "{}", stderr(&alone));
 }
+
+#[test]
+fn a_liquid_in_a_nose_hoover_chain_on_two_ranks_is_certified_and_samples_what_one_process_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scene(
+        dir.path(),
+        "nvt.lagra",
+        "scene nvt { entity atom { mass: 1 }
+           lattice { type: atom, kind: fcc, density: 0.8442, cells: [12, 12, 12], temperature: 2.5, seed: 5, velocities: uniform }
+           interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
+           thermostat nose_hoover { T: 1.0, tau: 0.1 }
+           @expect energy_conservation { tol: 5e-3, every: 20 }
+           @expect momentum_conservation { every: 20 }
+           solver { dt: 0.005, steps: 60 } }",
+    );
+    let (s, cert, states) = (scene.to_str().unwrap(), dir.path().join("c.json"), dir.path().join("s.states"));
+    let args = ["run", s, "--json", "--explain", "--certificate", cert.to_str().unwrap()];
+    let o = mpirun(2, &[&args[..], &["--states", states.to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("runs the scene whole"), "{}", stderr(&o));
+    let two: Value = serde_json::from_str(&stdout(&o)).expect("one report, from rank 0");
+    assert_eq!(two["passed"], true);
+    assert!(two["plan"].to_string().contains("domains: "), "{}", two["plan"]);
+    let alone = lagra(&["run", s, "--json"]);
+    assert_eq!(alone.status.code(), Some(0), "{}", stderr(&alone));
+    let one: Value = serde_json::from_str(&stdout(&alone)).unwrap();
+    // the chain's kinetic energy summed over the ranks: the samples agree to round-off
+    for what in ["kinetic_temperature", "potential_energy_per_body", "pressure"] {
+        let [a, b] = [&two, &one].map(|r| r["observables"][what]["mean"].as_f64().unwrap());
+        assert!((a - b).abs() < 1e-10 * b.abs(), "{what}: {a} on two ranks, {b} in one process");
+    }
+    let c = lagra(&["check", cert.to_str().unwrap(), "--states", states.to_str().unwrap(), "--scene", s]);
+    assert_eq!(c.status.code(), Some(0), "{}{}", stdout(&c), stderr(&c));
+    assert!(stdout(&c).contains("AGREES"), "{}", stdout(&c));
+}
+
+/// A rank killed in the middle of a run ends the job: no hang (mpirun's runtime takes the other
+/// ranks down), a failing exit, and no certificate or report that says PASS.
+#[test]
+fn a_rank_killed_mid_run_ends_the_job_without_a_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let long = std::fs::read_to_string(liquid(dir.path())).unwrap().replace("steps: 60", "steps: 1000000");
+    let scene = common::scene(dir.path(), "long.lagra", &long);
+    let cert = dir.path().join("c.json");
+    let s = scene.to_str().unwrap();
+    let job = Command::new("timeout")
+        .args(["300", "mpirun", "-np", "2", "--oversubscribe", env!("CARGO_BIN_EXE_lagra")])
+        .args(["run", s, "--json", "--certificate", cert.to_str().unwrap()])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // rank 1, found by the scene it runs and the rank its launcher gave it
+    let rank_one = || {
+        std::fs::read_dir("/proc").unwrap().flatten().find_map(|p| {
+            let cmd = std::fs::read(p.path().join("cmdline")).ok()?;
+            let env = std::fs::read(p.path().join("environ")).ok()?;
+            let has = |b: &[u8], s: &str| b.windows(s.len()).any(|w| w == s.as_bytes());
+            (has(&cmd, s) && !has(&cmd, "mpirun") && has(&env, "OMPI_COMM_WORLD_RANK=1\0"))
+                .then(|| p.file_name().to_string_lossy().into_owned())
+        })
+    };
+    let pid = (0..600)
+        .find_map(|_| {
+            let found = rank_one();
+            if found.is_none() {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            found
+        })
+        .expect("rank 1 started");
+    // let it step a while, then kill it as a node's failure would
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    assert!(Command::new("kill").args(["-9", &pid]).status().unwrap().success());
+    let o = job.wait_with_output().unwrap();
+    assert_ne!(o.status.code(), Some(124), "the job hung until the timeout");
+    assert!(!o.status.success(), "{}", stderr(&o));
+    // the launcher names the rank that died ("process rank 1 ... exited on signal 9")
+    assert!(stderr(&o).contains("rank 1"), "{}", stderr(&o));
+    assert!(!stdout(&o).contains("\"passed\": true"), "{}", stdout(&o));
+    // the certificate is written whole at the end (through a file renamed into place), or not
+    assert!(!cert.exists(), "a certificate was written");
+}

@@ -296,7 +296,10 @@ proptest! {
             let turned: Vec<[f64; 3]> = x.iter().map(|x| [c * x[0] - s * x[1], s * x[0] + c * x[1], x[2]]).collect();
             let (vt, vr) = (potential_at(kind, &p, &moved), potential_at(kind, &p, &turned));
             prop_assume!(v0.is_finite() && vt.is_finite() && vr.is_finite());
-            let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (a.abs() + b.abs() + 1e-300);
+            // relative, with a floor: a fluid's energy near the edge of its kernels' support is a
+            // difference of near neighbours (5.5e-10 differing by 4e-17 was seen), where every
+            // term that lacks a symmetry changes by far more under these moves
+            let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (a.abs() + b.abs()) + 1e-14;
             let (translation, rotation) = symmetric(kind);
             prop_assert_eq!(same(v0, vt), translation, "{:?} translation: {} vs {}", kind, v0, vt);
             prop_assert_eq!(same(v0, vr), rotation, "{:?} rotation: {} vs {}", kind, v0, vr);

@@ -150,6 +150,21 @@ impl LagrangianGraph {
         self.evaluate(s, f, true, Which::Positional)
     }
 
+    /// The potential energy and virial of every group with each interaction weighted by the
+    /// share of its bodies below `owned` (`Force::owned_sums`): a rank's part of the whole
+    /// system's, its ghosts from `owned` on. `None` if a group is not one the domains cut.
+    pub fn owned_sums(&self, s: &State, owned: usize) -> Option<Result<[f64; 2], Singularity>> {
+        let frame = self.frame_parts().frame(s);
+        let (mut e, mut w) = (Sum::default(), Sum::default());
+        for (_, g) in &self.groups {
+            match g.owned_sums(&frame, owned)? {
+                Ok([a, b]) => (e.add(a), w.add(b)),
+                Err(err) => return Some(Err(err)),
+            };
+        }
+        Some(Ok([e.value(), w.value()]))
+    }
+
     /// The virial W = Σ r·F of every group (`Force::virial`), for the pressure; `None` if a
     /// group acts from outside (a field).
     pub fn virial(&self, s: &State) -> Option<Result<f64, Singularity>> {
@@ -381,6 +396,59 @@ mod tests {
         assert!(pairs(&cut) < pairs(&whole) * 9 / 10, "{} of {} cluster pairs", pairs(&cut), pairs(&whole));
         // the ghosts' own forces lack the pairs left out
         assert!((first..n).any(|i| f[i] != g[i]));
+    }
+
+    /// The virial through the force kernel against the double loop over every pair: W = Σ r·F,
+    /// the force on i from j being s·(xⱼ − xᵢ) with s the shifted LJ's; the same bits on any
+    /// number of threads.
+    #[test]
+    fn the_virial_through_the_list_is_that_of_every_pair() {
+        let (model, s) = melt();
+        let mut w = crate::sum::Sum::default();
+        crate::traverse::pairs::<()>(&s.x, &model.cell, None, |_, _, d| {
+            let r2: f64 = d.iter().map(|c| c * c).sum();
+            if r2 < 6.25 {
+                let inv6 = r2.powi(-3);
+                w.add(-24.0 * (inv6 - 2.0 * inv6 * inv6));
+            }
+            Ok(())
+        })
+        .unwrap();
+        let every = w.value();
+        let one = LagrangianGraph::with_threads(&model, 1).unwrap().virial(&s).unwrap().unwrap();
+        assert!((one - every).abs() < 1e-11 * every.abs(), "{one} against {every}");
+        let two = LagrangianGraph::with_threads(&model, 2).unwrap().virial(&s).unwrap().unwrap();
+        assert_eq!(one.to_bits(), two.to_bits());
+    }
+
+    /// Two ranks' parts, each with its own bodies first and the other's after (as ghosts), add
+    /// up to the whole system's potential energy and virial: a pair within a part counts once,
+    /// a pair across the two half on each side.
+    #[test]
+    fn the_owned_parts_add_up_to_the_whole() {
+        let (model, s) = melt();
+        let g = LagrangianGraph::new(&model);
+        let whole = [g.forces(&s, &mut vec![[0.0; 3]; s.x.len()]).unwrap(), g.virial(&s).unwrap().unwrap()];
+        let all = g.owned_sums(&s, s.x.len()).unwrap().unwrap();
+        // every body owned: the whole's bits (one domain steps and measures as one process)
+        assert_eq!(all.map(f64::to_bits), whole.map(f64::to_bits), "{all:?} against {whole:?}");
+        let first = s.x.len() / 3;
+        let a = g.owned_sums(&s, first).unwrap().unwrap();
+        let mut turned = s.clone();
+        turned.x.rotate_left(first);
+        let b = LagrangianGraph::new(&model).owned_sums(&turned, s.x.len() - first).unwrap().unwrap();
+        for k in 0..2 {
+            let close = |x: f64| (x - whole[k]).abs() < 1e-10 * whole[k].abs();
+            assert!(
+                close(all[k]) && close(a[k] + b[k]),
+                "sum {k}: {} and {} + {} against {}",
+                all[k],
+                a[k],
+                b[k],
+                whole[k]
+            );
+            assert!(a[k].abs() < 0.5 * whole[k].abs(), "a third of the bodies hold about a third");
+        }
     }
 
     #[test]

@@ -22,6 +22,15 @@ impl Sum {
         self.carry += other.carry;
     }
 
+    /// The sum and its carry, to send (a run cut into domains adds the ranks' sums in rank order).
+    pub fn parts(self) -> [f64; 2] {
+        [self.sum, self.carry]
+    }
+
+    pub fn of_parts([sum, carry]: [f64; 2]) -> Sum {
+        Sum { sum, carry }
+    }
+
     pub fn value(self) -> f64 {
         self.sum + self.carry
     }

@@ -7,6 +7,7 @@
 
 use crate::state::State;
 use lagra_checker::thermostat::Chain;
+use lagra_lang::random::normal;
 
 /// Suzuki–Yoshida fourth-order weights: three sub-steps per chain half-step.
 const WEIGHTS: [f64; 3] = [1.351_207_191_959_657_8, -1.702_414_383_919_315_3, 1.351_207_191_959_657_8];
@@ -16,9 +17,18 @@ const WEIGHTS: [f64; 3] = [1.351_207_191_959_657_8, -1.702_414_383_919_315_3, 1.
 /// velocities scaled by exp(−ξ₁·δ), the links' positions, the links' velocities outwards. It
 /// is time-reversible, and with velocity Verlet between two of them conserves H′ to O(dt²).
 pub fn nose_hoover_half(chain: &Chain, s: &mut State, masses: &[f64], h: f64) {
+    let kinetic = crate::state::kinetic(s, masses);
+    let scale = chain_half(chain, &mut s.chain, kinetic, h);
+    s.v.iter_mut().flatten().for_each(|c| *c *= scale);
+}
+
+/// The chain's half-step alone, given the bodies' kinetic energy: the links advanced, and the
+/// factor the bodies' velocities are to be scaled by. A run cut into domains sums the kinetic
+/// energy over the ranks and scales each rank's own atoms.
+pub fn chain_half(chain: &Chain, links: &mut [[f64; 2]], kinetic: f64, h: f64) -> f64 {
     let (kt, q) = (chain.kt, &chain.masses);
     let last = q.len() - 1;
-    let mut twice_kinetic = 2.0 * crate::state::kinetic(s, masses);
+    let mut twice_kinetic = 2.0 * kinetic;
     let force = |j: usize, links: &[[f64; 2]], twice_kinetic: f64| {
         if j == 0 {
             (twice_kinetic - chain.dof * kt) / q[0]
@@ -27,7 +37,6 @@ pub fn nose_hoover_half(chain: &Chain, s: &mut State, masses: &[f64], h: f64) {
         }
     };
     let mut scale = 1.0;
-    let links = &mut s.chain;
     for w in WEIGHTS {
         let d = w * h;
         // a link's velocity, damped by the next link's for a quarter on each side of its kick
@@ -48,7 +57,28 @@ pub fn nose_hoover_half(chain: &Chain, s: &mut State, masses: &[f64], h: f64) {
             kick(links, j, g);
         }
     }
-    s.v.iter_mut().flatten().for_each(|c| *c *= scale);
+    scale
+}
+
+/// The O of BAOAB over `dt`: each body's velocity relaxed towards the bath's and kicked by its
+/// noise, drawn for the body's number in the scene (`number` of its place in `v`: a rank of a run
+/// cut into domains holds some bodies, and draws for each what one process would).
+pub fn langevin_bath(
+    v: &mut [[f64; 3]],
+    inverse_masses: &[f64],
+    number: impl Fn(usize) -> usize,
+    (kt, gamma, seed): (f64, f64, u64),
+    step: u64,
+    dt: f64,
+) {
+    let c1 = libm::exp(-gamma * dt);
+    let c2 = libm::sqrt(1.0 - c1 * c1);
+    for (k, (v, w)) in v.iter_mut().zip(inverse_masses).enumerate() {
+        let (sigma, i) = (c2 * libm::sqrt(kt * w), number(k));
+        for (c, vc) in v.iter_mut().enumerate() {
+            *vc = c1 * *vc + sigma * normal(seed, step, 3 * i as u64 + c as u64);
+        }
+    }
 }
 
 #[cfg(test)]

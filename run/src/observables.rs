@@ -160,15 +160,25 @@ impl Observer {
         }
     }
 
-    /// One sampled state, with the potential energy there (the solver's witness).
-    pub fn observe(&mut self, g: &LagrangianGraph, s: &State, potential: f64) -> Result<(), String> {
+    /// One sampled state, with the potential energy there (the solver's witness) and, if known
+    /// (a run in domains measures it), the virial.
+    pub fn observe(
+        &mut self,
+        g: &LagrangianGraph,
+        s: &State,
+        potential: f64,
+        virial: Option<f64>,
+    ) -> Result<(), String> {
         let index = self.energy.len() as u64;
         let twice_kinetic = 2.0 * kinetic(s, &self.masses);
         let tail = self.tail.unwrap_or(Tail { energy_per_body: 0.0, pressure: 0.0 });
         self.energy.push(potential / self.bodies + tail.energy_per_body);
         self.temperature.push(twice_kinetic / self.dof);
         if let (true, Some(volume)) = (self.virial, self.volume) {
-            let w = g.virial(s).expect("a virial where there was one").map_err(|e| e.to_string())?;
+            let w = match virial {
+                Some(w) => w,
+                None => g.virial(s).expect("a virial where there was one").map_err(|e| e.to_string())?,
+            };
             self.pressure.push((twice_kinetic + w) / (3.0 * volume) + tail.pressure);
         }
         if self.bounds.contains(&index) {

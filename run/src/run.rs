@@ -3,7 +3,7 @@
 //! state halts the run at that step.
 
 use crate::checking::{can_overlap, Checking};
-use crate::domains::Shared;
+use crate::domains::{EnergyAndVirial, Shared};
 use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
 use crate::restart::{setup_of, Restart};
@@ -212,8 +212,8 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let end = opts.until.map_or(steps, |u| u.min(steps));
     let mut restarts = opts.restarts.take();
     let mut shared = opts.shared.take();
-    if shared.is_some() && (!meters.is_empty() || observer.is_some()) {
-        return Err("a run in domains measures no prediction or observable".into());
+    if shared.is_some() && !meters.is_empty() {
+        return Err("a run in domains measures no prediction".into());
     }
     // What goes on from the state reached. In domains rank 0 has the state, not its forces: they
     // are evaluated whole here, as a run in one process stopped there would have them, so that
@@ -290,11 +290,26 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         match stepper {
             Err(e) => stop = Some(Stop::Solver { step: 0, message: e.to_string() }),
             Ok(mut solver) => {
-                let sample =
-                    |o: &mut Option<Observer>, s: &State, potential: f64| match o.as_mut().filter(|o| o.due(s.step)) {
-                        Some(o) => o.observe(&graph, s, potential),
-                        None => Ok(()),
-                    };
+                // in domains rank 0 gathers a state, not its sums: the ranks measure the potential
+                // energy and virial where a frame or a sample needs them (`EnergyAndVirial`)
+                let frame = scene.solver.steps_per_frame.max(1);
+                let framed = |step: u64| tracing && (step.is_multiple_of(frame) || step == steps);
+                let potential = |m: Option<EnergyAndVirial>, solver: &Stepper| {
+                    m.map_or_else(|| solver.potential(), |m| m.potential)
+                };
+                let sample = |o: &mut Option<Observer>, s: &State, potential: f64, m: Option<EnergyAndVirial>| match o
+                    .as_mut()
+                    .filter(|o| o.due(s.step))
+                {
+                    Some(o) => o.observe(&graph, s, potential, m.map(|m| m.virial)),
+                    None => Ok(()),
+                };
+                let sampled_at_start = carried.is_none() && observer.as_ref().is_some_and(|o| o.due(state.step));
+                let here = state.step;
+                let at_start = match shared.as_mut() {
+                    Some(d) if tracing || sampled_at_start => d.advance_to(&mut state, here, true)?,
+                    _ => None,
+                };
                 match &carried {
                     Some(c) => {
                         // (in domains the ranks evaluated the restart's state afresh)
@@ -306,16 +321,12 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     None => {
                         stop = check(&mut checking, &mut state, true)?;
                         meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
-                        sample(&mut observer, &state, solver.potential())?;
+                        sample(&mut observer, &state, potential(at_start, &solver), at_start)?;
                     }
                 }
                 if tracing {
-                    trace(
-                        &state,
-                        if shared.is_some() { whole_potential(&graph, &state)? } else { solver.potential() },
-                    )?;
+                    trace(&state, potential(at_start, &solver))?;
                 }
-                let frame = scene.solver.steps_per_frame.max(1);
                 let next = |every: u64, step: u64| (step / every).saturating_add(1).saturating_mul(every);
                 while stop.is_none() && state.step < end {
                     let next_frame = if tracing { next(frame, state.step) } else { u64::MAX };
@@ -327,14 +338,20 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         let due = checking.next_due(state.step).min(next_frame).min(next_look);
                         due.min(next(stride, state.step)).min(sampled).min(next(every_restart, state.step))
                     };
+                    let to = until.min(end);
                     let advanced = match shared.as_mut() {
-                        Some(d) => d.advance_to(&mut state, until.min(end)),
-                        None => solver.advance_to(&graph, &mut state, dt, until.min(end)).map_err(|e| e.to_string()),
+                        Some(d) => {
+                            d.advance_to(&mut state, to, observer.as_ref().is_some_and(|o| o.due(to)) || framed(to))
+                        }
+                        None => solver.advance_to(&graph, &mut state, dt, to).map(|_| None).map_err(|e| e.to_string()),
                     };
-                    if let Err(message) = advanced {
-                        stop = Some(Stop::Solver { step: state.step + 1, message });
-                        break;
-                    }
+                    let measured = match advanced {
+                        Ok(m) => m,
+                        Err(message) => {
+                            stop = Some(Stop::Solver { step: state.step + 1, message });
+                            break;
+                        }
+                    };
                     stop = check(&mut checking, &mut state, true)?;
                     // (the domains' forces were tested finite on their ranks)
                     if stop.is_none() && shared.is_none() && !solver.potential().is_finite() {
@@ -342,15 +359,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     }
                     meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                     if stop.is_none() {
-                        sample(&mut observer, &state, solver.potential())?;
+                        sample(&mut observer, &state, potential(measured, &solver), measured)?;
                     }
-                    if tracing && (state.step.is_multiple_of(frame) || state.step == steps) {
-                        let potential = match shared {
-                            // the state is gathered here, its potential energy is not: worked out whole
-                            Some(_) => whole_potential(&graph, &state)?,
-                            None => solver.potential(),
-                        };
-                        trace(&state, potential)?;
+                    if framed(state.step) {
+                        trace(&state, potential(measured, &solver))?;
                     }
                     if let Some(w) = watch.as_mut().filter(|w| state.step.is_multiple_of(w.every.max(1))) {
                         (w.see)(&state);
@@ -445,12 +457,6 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         first_step,
         restart,
     })
-}
-
-/// The potential energy of a whole state, for a trace frame of a run in domains (rank 0 has the
-/// state there, and no force of it).
-fn whole_potential(graph: &LagrangianGraph, s: &State) -> Result<f64, String> {
-    graph.forces(s, &mut vec![[0.0; 3]; s.x.len()]).map_err(|e| format!("the trace's energy at step {}: {e}", s.step))
 }
 
 /// What goes on from state `s` (the front names its scene and certificate).

@@ -44,14 +44,32 @@ pub fn traits<T: Paired>(l: &Neighbours, s: &Frame) -> Vec<Traits> {
         .collect()
 }
 
+/// What the kernel sums besides the forces (its `SUM`): nothing, the pairs' potential energy, or
+/// their Σ s·r² (s the force over the distance: the virial's pair sum, −W).
+pub const FORCES_ONLY: u8 = 0;
+pub const ENERGY: u8 = 1;
+pub const VIRIAL: u8 = 2;
+/// The two sums each pair weighted by its bodies' mean share (`shares`): a rank's part of a
+/// system cut into domains, owned bodies' share 1, ghosts' 0, so a pair across two ranks counts
+/// half on each.
+pub const OWNED_ENERGY: u8 = 3;
+pub const OWNED_VIRIAL: u8 = 4;
+
+/// Each slot's share for the `OWNED_*` sums, by cluster: 1 for a body below `owned`, 0 for the
+/// others and the empty slots.
+pub fn shares(l: &Neighbours, owned: usize) -> Vec<F64x4> {
+    let share = |b: u32| if b != EMPTY && (b as usize) < owned { 1.0 } else { 0.0 };
+    l.bodies.chunks(LANES).map(|slots| F64x4::new(std::array::from_fn(|k| share(slots[k])))).collect()
+}
+
 /// Row `row`'s forces over the i-clusters `range` added to `f`, a piece's buffer (i-cluster
-/// `ic` at `ic - range.start`, listed pair q's j-cluster at `place[q]`: `pieces`), and its
-/// energy if `ENERGY`: plain within an i-cluster's pairs, compensated across clusters. Where the CPU has
+/// `ic` at `ic - range.start`, listed pair q's j-cluster at `place[q]`: `pieces`), and the sum
+/// `SUM` asks for: plain within an i-cluster's pairs, compensated across clusters. Where the CPU has
 /// AVX-512 (detected at run time), the same code compiled for it (`wide_registers`).
-pub fn kernel<T: Paired, const ENERGY: bool>(
+pub fn kernel<T: Paired, const SUM: u8>(
     l: &Neighbours,
     row: &T::Row,
-    traits: &[Traits],
+    (traits, shares): (&[Traits], &[F64x4]),
     range: Range<usize>,
     place: &[u32],
     f: &mut [Cluster],
@@ -59,9 +77,9 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx512vl") {
         // SAFETY: the CPU has the features `wide_registers` is compiled for, checked just above.
-        return unsafe { wide_registers::<T, ENERGY>(l, row, traits, range, place, f) };
+        return unsafe { wide_registers::<T, SUM>(l, row, (traits, shares), range, place, f) };
     }
-    portable::<T, ENERGY>(l, row, traits, range, place, f)
+    portable::<T, SUM>(l, row, (traits, shares), range, place, f)
 }
 
 /// `portable` compiled for AVX-512: its vectors stay 256 bits wide (the same instructions on
@@ -74,22 +92,22 @@ pub fn kernel<T: Paired, const ENERGY: bool>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 #[inline(never)]
-fn wide_registers<T: Paired, const ENERGY: bool>(
+fn wide_registers<T: Paired, const SUM: u8>(
     l: &Neighbours,
     row: &T::Row,
-    traits: &[Traits],
+    (traits, shares): (&[Traits], &[F64x4]),
     range: Range<usize>,
     place: &[u32],
     f: &mut [Cluster],
 ) -> Sum {
-    portable::<T, ENERGY>(l, row, traits, range, place, f)
+    portable::<T, SUM>(l, row, (traits, shares), range, place, f)
 }
 
 #[inline(always)]
-fn portable<T: Paired, const ENERGY: bool>(
+fn portable<T: Paired, const SUM: u8>(
     l: &Neighbours,
     row: &T::Row,
-    traits: &[Traits],
+    (traits, shares): (&[Traits], &[F64x4]),
     range: Range<usize>,
     place: &[u32],
     f: &mut [Cluster],
@@ -107,15 +125,15 @@ fn portable<T: Paired, const ENERGY: bool>(
             // a cluster with itself at the zero image: each pair once, the lower triangle masked
             // (a separate instance, so that every other pair goes without the mask)
             if jc == ic && p.image() == CENTRE {
-                rows::<T, ENERGY, true>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, fj);
+                rows::<T, SUM, true>(l, row, (traits, shares), (ic, jc, p.image()), &mut fi, &mut e, fj);
             } else {
-                rows::<T, ENERGY, false>(l, row, traits, (ic, jc, p.image()), &mut fi, &mut e, fj);
+                rows::<T, SUM, false>(l, row, (traits, shares), (ic, jc, p.image()), &mut fi, &mut e, fj);
             }
         }
         for c in 0..3 {
             f[ic - base][c] = f[ic - base][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
         }
-        if ENERGY {
+        if SUM != FORCES_ONLY {
             energy.add(e.sum());
         }
     }
@@ -123,13 +141,13 @@ fn portable<T: Paired, const ENERGY: bool>(
 }
 
 /// One cluster pair's sixteen body pairs, as four rows: body a of the i-cluster against the
-/// j-cluster's four lanes; its forces into `fi` and `fj`, its energy into `e`.
+/// j-cluster's four lanes; its forces into `fi` and `fj`, its energy or s·r² into `e`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
+fn rows<T: Paired, const SUM: u8, const DIAGONAL: bool>(
     l: &Neighbours,
     row: &T::Row,
-    traits: &[Traits],
+    (traits, shares): (&[Traits], &[F64x4]),
     (ic, jc, image): (usize, usize, usize),
     fi: &mut [[F64x4; 3]; LANES],
     e: &mut F64x4,
@@ -154,8 +172,14 @@ fn rows<T: Paired, const ENERGY: bool, const DIAGONAL: bool>(
             fa[c] = d[c].mul_add(s, fa[c]);
             fj[c] = d[c].mul_neg_add(s, fj[c]);
         }
-        if ENERGY {
-            *e = *e + inside.and(v);
+        // (a share of 1 rounds as the plain sums do: a domain owning every body gives their bits)
+        let share = || (F64x4::splat(shares[ic].lane(a)) + shares[jc]) * 0.5;
+        match SUM {
+            ENERGY => *e = *e + inside.and(v),
+            VIRIAL => *e = *e + s * r2,
+            OWNED_ENERGY => *e = inside.and(v).mul_add(share(), *e),
+            OWNED_VIRIAL => *e = (s * r2).mul_add(share(), *e),
+            _ => {}
         }
     }
     for c in 0..3 {
@@ -359,7 +383,8 @@ mod tests {
         let p = [1.0, 1.0, 2.5];
         let row = lennard_jones::Shifted::row(&p);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        let e = kernel::<lennard_jones::Shifted, true>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f).value();
+        let e =
+            kernel::<lennard_jones::Shifted, ENERGY>(&l, &row, (&[], &[]), 0..l.clusters(), &whole(&l), &mut f).value();
         let (mut scalar, mut size, mut es) = (vec![[0.0; 3]; x.len()], vec![0.0; x.len()], 0.0);
         l.each_pair::<()>(|i, j, d| {
             let (a, v) = lennard_jones::Shifted::eval(&row, d, [0.0; 4], 0.0).unwrap();
@@ -411,8 +436,10 @@ mod tests {
             let mut f = vec![[F64x4::default(); 3]; l.clusters()];
             let e = match wide {
                 // SAFETY: the CPU has AVX-512VL (the test returned above otherwise)
-                true => unsafe { wide_registers::<T, true>(l, &row, traits, 0..l.clusters(), &whole(l), &mut f) },
-                false => portable::<T, true>(l, &row, traits, 0..l.clusters(), &whole(l), &mut f),
+                true => unsafe {
+                    wide_registers::<T, ENERGY>(l, &row, (traits, &[]), 0..l.clusters(), &whole(l), &mut f)
+                },
+                false => portable::<T, ENERGY>(l, &row, (traits, &[]), 0..l.clusters(), &whole(l), &mut f),
             };
             (f.iter().flatten().flat_map(|c| c.to_array()).map(f64::to_bits).collect(), e.value().to_bits())
         }
@@ -434,12 +461,12 @@ mod tests {
         l.update(&x, &cell, None);
         let row = lennard_jones::Plain::row(&[1.0, 1.0, 2.5]);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f);
+        kernel::<lennard_jones::Plain, FORCES_ONLY>(&l, &row, (&[], &[]), 0..l.clusters(), &whole(&l), &mut f);
         assert!(f.iter().flatten().any(|c| c.to_array().iter().any(|v| !v.is_finite())));
         x[17][0] += 0.9;
         l.update(&x, &cell, None);
         let mut f = vec![[F64x4::default(); 3]; l.clusters()];
-        kernel::<lennard_jones::Plain, false>(&l, &row, &[], 0..l.clusters(), &whole(&l), &mut f);
+        kernel::<lennard_jones::Plain, FORCES_ONLY>(&l, &row, (&[], &[]), 0..l.clusters(), &whole(&l), &mut f);
         assert!(f.iter().flatten().all(|c| c.to_array().iter().all(|v| v.is_finite())));
     }
 }

@@ -125,6 +125,19 @@ impl<T: Bonded<N> + Send + Sync, const N: usize> Force for Bonds<T, N> {
         };
         Some((0..self.sites.len()).map(each).collect::<Result<Sum, _>>().map(|w| w.value()))
     }
+    fn owned_sums(&self, s: &Frame, owned: usize) -> Option<Result<[f64; 2], Singularity>> {
+        let (mut e, mut w) = (Sum::default(), Sum::default());
+        for (k, b) in self.sites.iter().enumerate() {
+            let share = b.iter().filter(|&&i| i < owned).count() as f64 / N as f64;
+            let (x, fs, energy) = match self.one(k, s, true) {
+                Ok(one) => one,
+                Err(e) => return Some(Err(e)),
+            };
+            e.add(share * energy);
+            w.add(share * (0..N).map(|i| (0..3).map(|c| (x[i][c] - x[0][c]) * fs[i][c]).sum::<f64>()).sum::<f64>());
+        }
+        Some(Ok([e.value(), w.value()]))
+    }
     fn plan(&self) -> String {
         format!("{} listed instance(s), in order", self.sites.len())
     }

@@ -145,6 +145,13 @@ pub trait Force: Send + Sync {
     /// share of the pressure. `None` for a group acting from outside (a field), which has no
     /// virial a periodic box would give meaning to.
     fn virial(&self, s: &Frame) -> Option<Result<f64, Singularity>>;
+    /// The group's potential energy and virial with each interaction weighted by the share of
+    /// its bodies below `owned` (a pair: 1, ½ or 0; a bond: the fraction of its sites): a rank's
+    /// part of a system cut into domains, bodies `owned..` its ghosts, so that the ranks' parts
+    /// add up to the whole's. `None` for a group the domains do not cut.
+    fn owned_sums(&self, _s: &Frame, _owned: usize) -> Option<Result<[f64; 2], Singularity>> {
+        None
+    }
     /// Adds the derivative of the group's forces along `dir` to `df`, from the definitions.
     fn tangent(&self, s: &Frame, dir: &Direction, df: &mut [[f64; 3]]) -> Result<(), Singularity>;
     /// Adds the transpose of the forces' derivatives applied to `g` (one covector per body) to

@@ -92,17 +92,21 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
 
     /// Through the cluster-pair list (`clusters::kernel`), piece by piece (`on_pieces`). The cut
     /// depends on the list alone: the same bits on any number of threads.
-    fn through_list(&self, l: &Neighbours, s: &Frame, f: &mut [[f64; 3]], energy: bool) -> Result<f64, Singularity> {
+    fn through_list<const SUM: u8>(
+        &self,
+        l: &Neighbours,
+        s: &Frame,
+        f: &mut [[f64; 3]],
+        shares: &[F64x4],
+    ) -> Result<f64, Singularity> {
         let pieces = &l.pieces;
         let traits = clusters::traits::<T>(l, s);
+        let bodies = (&traits[..], shares);
         // (two bodies at one point make the forces non-finite: `accumulate` then names them)
         let sums = self.on_pieces(l, f, |k, buffer| {
             let mut sum = Sum::default();
             for row in &self.rows {
-                sum.merge(match energy {
-                    true => clusters::kernel::<T, true>(l, row, &traits, pieces.own(k), &pieces.place, buffer),
-                    false => clusters::kernel::<T, false>(l, row, &traits, pieces.own(k), &pieces.place, buffer),
-                });
+                sum.merge(clusters::kernel::<T, SUM>(l, row, bodies, pieces.own(k), &pieces.place, buffer));
             }
             sum
         });
@@ -322,7 +326,10 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         let Some(list) = &self.list else { return self.traversed(s, f) };
         let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         l.update(s.x, &self.cell, self.pool.as_deref());
-        let energy = self.through_list(&l, s, f, energy)?;
+        let energy = match energy {
+            true => self.through_list::<{ clusters::ENERGY }>(&l, s, f, &[])?,
+            false => self.through_list::<{ clusters::FORCES_ONLY }>(&l, s, f, &[])?,
+        };
         let finite = |b: &[f64; 3]| b.iter().all(|c| c.is_finite());
         let all_finite = match self.pool.as_ref().filter(|_| f.len() >= 4 * BLOCK) {
             Some(pool) => pool.install(|| f.par_iter().with_min_len(BLOCK).all(finite)),
@@ -340,7 +347,13 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         if let Some(list) = &self.list {
             let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
             l.update(s.x, &self.cell, self.pool.as_deref());
-            return Some(self.listed_virial(&l, s));
+            // through the force kernel, on the pool (its forces dropped); where a pair is
+            // singular, the pair by pair sum names it
+            let mut f = vec![[0.0; 3]; s.x.len()];
+            return Some(match self.through_list::<{ clusters::VIRIAL }>(&l, s, &mut f, &[]) {
+                Ok(w) if w.is_finite() => Ok(-w),
+                _ => self.listed_virial(&l, s),
+            });
         }
         let mut w = Sum::default();
         let visited = self.within_reach(s, |i, j, d| {
@@ -352,6 +365,32 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             Ok(())
         });
         Some(visited.map(|_| w.value()))
+    }
+    fn owned_sums(&self, s: &Frame, owned: usize) -> Option<Result<[f64; 2], Singularity>> {
+        let share = |i: usize, j: usize| 0.5 * (f64::from(u8::from(i < owned)) + f64::from(u8::from(j < owned)));
+        let Some(list) = &self.list else {
+            let (mut e, mut w) = (Sum::default(), Sum::default());
+            let visited = self.within_reach(s, |i, j, d| {
+                for p in &self.rows {
+                    let (a, v) = T::eval(p, d, bodies::<T>(s, i, j), colour::<T>(s, i, j))
+                        .map_err(|what| Singularity::pair(self.name, i, j, what, &d))?;
+                    e.add(share(i, j) * v);
+                    w.add(-share(i, j) * (d[0] * a[0] + d[1] * a[1] + d[2] * a[2]));
+                }
+                Ok(())
+            });
+            return Some(visited.map(|_| [e.value(), w.value()]));
+        };
+        let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        l.update(s.x, &self.cell, self.pool.as_deref());
+        let (shares, mut f) = (clusters::shares(&l, owned), vec![[0.0; 3]; s.x.len()]);
+        let sums = self
+            .through_list::<{ clusters::OWNED_ENERGY }>(&l, s, &mut f, &shares)
+            .and_then(|e| Ok([e, -self.through_list::<{ clusters::OWNED_VIRIAL }>(&l, s, &mut f, &shares)?]));
+        Some(sums.and_then(|sums| match sums.iter().all(|x| x.is_finite()) {
+            true => Ok(sums),
+            false => Err(Singularity { term: self.name, bodies: vec![], what: OVERFLOW, seen: None }),
+        }))
     }
     fn velocity_dependent(&self) -> bool {
         false

@@ -7,7 +7,7 @@
 use super::{implicit_kick, Carried, Evaluated, Failure, Solver};
 use crate::graph::LagrangianGraph;
 use crate::state::State;
-use lagra_lang::random::normal;
+use crate::thermostat::langevin_bath;
 
 pub struct Baoab {
     pub at: Evaluated,
@@ -21,14 +21,7 @@ impl Solver for Baoab {
         let h = 0.5 * dt;
         g.kick(&mut s.v, &self.at.f, h);
         g.drift(s, h);
-        let c1 = libm::exp(-self.gamma * dt);
-        let c2 = libm::sqrt(1.0 - c1 * c1);
-        for (i, (v, w)) in s.v.iter_mut().zip(&g.inverse_masses).enumerate() {
-            let sigma = c2 * libm::sqrt(self.kt * w);
-            for (c, vc) in v.iter_mut().enumerate() {
-                *vc = c1 * *vc + sigma * normal(self.seed, s.step, 3 * i as u64 + c as u64);
-            }
-        }
+        langevin_bath(&mut s.v, &g.inverse_masses, |i| i, (self.kt, self.gamma, self.seed), s.step, dt);
         g.drift(s, h);
         if g.velocity_dependent() {
             return implicit_kick(g, s, &mut self.at, h, |_| Ok(()));

@@ -1,5 +1,5 @@
-//! What the domains say to each other: three collectives and an exchange among neighbours,
-//! enough for ghosts, migration, the step's agreement and the gather. MPI provides them in the binary (`src/ranks.rs`, the `mpi`
+//! What the domains say to each other: four collectives and an exchange among neighbours,
+//! enough for ghosts, migration, the step's agreement, a thermostat's sums and the gather. MPI provides them in the binary (`src/ranks.rs`, the `mpi`
 //! feature); `Alone` is one rank; `Threads` (tests) runs the ranks as threads of one process,
 //! so the decomposition is tested without MPI.
 
@@ -14,6 +14,10 @@ pub trait Exchange {
     fn max(&self, x: &mut [f64]);
     /// Rank 0's value, on every rank.
     fn broadcast(&self, x: &mut u64);
+    /// Every rank's `mine` (as long on each), one after another in rank order, on every rank.
+    fn all_gather(&self, mine: &[f64]) -> Vec<f64> {
+        self.all_to_all(vec![mine.to_vec(); self.size()]).concat()
+    }
     /// Sends `out[k]` to rank `peers[k]` and returns what each peer sent here, in the same
     /// order: an exchange among neighbours only, every rank's `peers` naming it back. By
     /// default through `all_to_all`; MPI's sends and receives only to the peers.

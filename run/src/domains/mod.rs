@@ -17,10 +17,16 @@
 //! so trajectories agree with the one-process run to round-off that grows as the dynamics
 //! amplifies it (tested against a bound in `tests`).
 //!
+//! A thermostat is stepped as one process steps it (`Bath`): a Nosé–Hoover chain on every rank,
+//! moved by the kinetic energy gathered from the ranks; a Langevin bath's noise drawn for each
+//! atom's number.
+//!
 //! The claims are judged by rank 0's ordinary checker on the whole state, gathered at each
 //! state it is shown (`Shared::advance_to`): a certificate is the one a single process would
 //! write for that state, re-checked by `lagra-check` anywhere. The cost: one gather of every
-//! atom's position and velocity to rank 0 per checkpoint, and the checker's work there.
+//! atom's position and velocity to rank 0 per checkpoint, and the checker's work there. A trace
+//! frame's energy and a sample's potential energy and virial are the ranks' own sums
+//! (`EnergyAndVirial`), added on every rank.
 
 pub mod bonded;
 pub mod bricks;
@@ -34,9 +40,12 @@ use lagra_checker::terms::Shape;
 use lagra_kernel::forces::Pool;
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::state::State;
-use lagra_kernel::step::{kick, kick_drift, set_step};
+use lagra_kernel::step::{drift, kick, kick_drift, set_step};
+use lagra_kernel::sum::Sum;
+use lagra_kernel::thermostat::{chain_half, langevin_bath};
 use lagra_lang::integrator::Integrator;
 use lagra_lang::scene::Scene;
+use lagra_lang::thermostat::Thermostat;
 use std::time::Instant;
 
 /// The skin beyond the reach, as a fraction of it (the kernel's lists use the same).
@@ -71,24 +80,33 @@ pub fn fits(scene: &Scene) -> Result<(), String> {
     if m.terms.is_empty() {
         return not("has no interaction");
     }
-    if !m.constraints.is_empty() || !m.pins.is_empty() || m.floor.is_some() || m.thermostat.is_some() {
-        return not("has constraints, joints, a floor or a thermostat");
+    if !m.constraints.is_empty() || !m.pins.is_empty() || m.floor.is_some() {
+        return not("has constraints, joints or a floor");
     }
     if m.bodies.iter().any(|b| b.moments.is_some() || b.solid.is_some()) {
         return not("has rigid or solid bodies");
     }
-    if !scene.predictions.is_empty() || scene.sampling.is_some() {
-        return not("has predictions or sampled observables (measured at every step on rank 0)");
+    if !scene.predictions.is_empty() {
+        return not("has predictions (measured at every step on rank 0)");
     }
     Ok(())
 }
 
 /// Steps taken by every rank together, seen from rank 0's run loop: advance to a step and
-/// gather the whole state there.
+/// gather the whole state there, and if asked measure it (`EnergyAndVirial`).
 pub trait Shared {
-    fn advance_to(&mut self, s: &mut State, until: u64) -> Result<(), String>;
+    fn advance_to(&mut self, s: &mut State, until: u64, measure: bool) -> Result<Option<EnergyAndVirial>, String>;
     /// How the work was shared, for `--explain`.
     fn plan(&self) -> String;
+}
+
+/// The whole system's potential energy and virial at a state, each rank's part (its own atoms'
+/// share of its interactions: `LagrangianGraph::owned_sums`) added in rank order: what a trace
+/// frame and a sampled observable read, with no pass over the whole system on rank 0.
+#[derive(Clone, Copy, Debug)]
+pub struct EnergyAndVirial {
+    pub potential: f64,
+    pub virial: f64,
 }
 
 /// One rank's share of the run: its atoms, its ghosts, and the kernel's graph of them.
@@ -104,6 +122,7 @@ pub struct Domain<E: Exchange> {
     model: Model,
     bodies: Vec<lagra_checker::model::Body>,
     bonded: Bonded,
+    bath: Bath,
     /// The atoms this rank owns, by number, ascending.
     owned: Vec<usize>,
     /// The ranks whose bricks touch this one's (`Bricks::peers`), and each rank's place among
@@ -114,7 +133,8 @@ pub struct Domain<E: Exchange> {
     send: Vec<Vec<usize>>,
     /// The ghosts' numbers, in their places after the owned atoms.
     ghosts: Vec<usize>,
-    /// The owned atoms then the ghosts (velocities of ghosts zero: no force reads them).
+    /// The owned atoms then the ghosts (velocities of ghosts zero: no force reads them), and a
+    /// thermostat chain's links (the same on every rank).
     local: State,
     /// The forces on `local`, owned first; between steps, the owned atoms' at the state reached.
     f: Vec<[f64; 3]>,
@@ -128,6 +148,31 @@ pub struct Domain<E: Exchange> {
     owned_kept: bool,
     /// Whether rank 0's share, dropped, sends the others home: once every rank has one.
     leads: bool,
+}
+
+/// What holds the run at a temperature, stepped over the ranks' atoms as in one process.
+enum Bath {
+    None,
+    /// A Nosé–Hoover chain: its links on every rank, moved by the kinetic energy of every
+    /// rank's atoms summed in rank order.
+    Chain(lagra_checker::thermostat::Chain),
+    /// A Langevin bath (BAOAB): each atom's noise drawn for its number, as in one process.
+    Langevin {
+        kt: f64,
+        gamma: f64,
+        seed: u64,
+    },
+}
+
+impl Bath {
+    /// What `--explain` says of it.
+    fn said(&self) -> &'static str {
+        match self {
+            Bath::None => "",
+            Bath::Chain(_) => "; a Nosé–Hoover chain, the kinetic energy gathered from every rank twice a step",
+            Bath::Langevin { .. } => "; a Langevin bath, each atom's noise drawn for its number",
+        }
+    }
 }
 
 /// What the plan reports.
@@ -154,6 +199,13 @@ impl<E: Exchange> Domain<E> {
         let model = Model { bodies: vec![], terms: pairs, ..scene.model.clone() };
         let bodies = scene.model.bodies.clone();
         let bonded = Bonded::of(&scene.model, &s.x);
+        let bath = match (&scene.thermostat, &scene.model.thermostat) {
+            (Some(Thermostat::NoseHoover { .. }), Some(chain)) => Bath::Chain(chain.clone()),
+            (Some(Thermostat::Langevin { kt, gamma, seed }), _) => {
+                Bath::Langevin { kt: *kt, gamma: *gamma, seed: *seed }
+            }
+            _ => Bath::None,
+        };
         let cell = model.cell.expect("fits: a periodic box");
         let reach = model.terms.iter().map(|t| t.kind.reach(&t.params)).fold(bonded.span, f64::max);
         let halo = reach * (1.0 + SKIN);
@@ -169,7 +221,7 @@ impl<E: Exchange> Domain<E> {
             t: s.t,
             x: owned.iter().map(|&i| s.x[i]).collect(),
             v: owned.iter().map(|&i| s.v[i]).collect(),
-            chain: vec![],
+            chain: s.chain.clone(),
             spin: vec![],
         };
         let graph = LagrangianGraph::with_pool(&model, None);
@@ -183,6 +235,7 @@ impl<E: Exchange> Domain<E> {
             model,
             bodies,
             bonded,
+            bath,
             owned,
             peers: vec![],
             peer_at: vec![],
@@ -329,12 +382,22 @@ impl<E: Exchange> Domain<E> {
     }
 
     /// One velocity Verlet step of the owned atoms, as the one-process solver takes it (the same
-    /// arithmetic per atom, `kick_drift` then `kick`).
+    /// arithmetic per atom, `kick_drift` then `kick`), inside a thermostat's half-steps or with a
+    /// Langevin bath between its drifts.
     fn step(&mut self) -> Result<(), String> {
-        let (n, h) = (self.owned.len(), 0.5 * self.dt);
+        let (n, h, dt) = (self.owned.len(), 0.5 * self.dt, self.dt);
+        self.chain_half(h);
         let spread = self.graph.spread();
         let l = &mut self.local;
-        kick_drift(&mut l.x[..n], &mut l.v[..n], &mut self.f[..n], &self.inverse, (h, self.dt), false, spread);
+        match self.bath {
+            Bath::Langevin { kt, gamma, seed } => {
+                kick(&mut l.v[..n], &self.f[..n], &self.inverse, h);
+                drift(&mut l.x[..n], &l.v[..n], h);
+                langevin_bath(&mut l.v[..n], &self.inverse, |k| self.owned[k], (kt, gamma, seed), self.step, dt);
+                drift(&mut l.x[..n], &l.v[..n], h);
+            }
+            _ => kick_drift(&mut l.x[..n], &mut l.v[..n], &mut self.f[..n], &self.inverse, (h, dt), false, spread),
+        }
         let moved = l.x[..n].iter().zip(&self.since).map(|(x, s)| dist2(x, s)).fold(0.0, f64::max);
         let mut far = [moved];
         self.talk(|ex, _| ex.max(&mut far));
@@ -352,8 +415,30 @@ impl<E: Exchange> Domain<E> {
         self.tally.forcing += t.elapsed().as_secs_f64();
         let n = self.owned.len();
         kick(&mut self.local.v[..n], &self.f[..n], &self.inverse, h);
+        self.chain_half(h);
         self.step += 1;
         Ok(())
+    }
+
+    /// A Nosé–Hoover chain's half-step: the owned atoms' kinetic energy summed (compensated, in
+    /// number order, as one process sums it), the ranks' sums added in rank order on every rank
+    /// (so every rank moves the links alike, and one rank gives the one-process bits), the
+    /// owned atoms' velocities scaled.
+    fn chain_half(&mut self, h: f64) {
+        if !matches!(self.bath, Bath::Chain(_)) {
+            return;
+        }
+        let n = self.owned.len();
+        let mine: Sum = (self.local.v[..n].iter().zip(&self.owned))
+            .map(|(v, &i)| 0.5 * self.bodies[i].mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+            .collect();
+        let all = self.talk(|ex, _| ex.all_gather(&mine.parts()));
+        let mut kinetic = Sum::default();
+        all.chunks_exact(2).for_each(|p| kinetic.merge(Sum::of_parts([p[0], p[1]])));
+        if let Bath::Chain(chain) = &self.bath {
+            let scale = chain_half(chain, &mut self.local.chain, kinetic.value(), h);
+            self.local.v[..n].iter_mut().flatten().for_each(|c| *c *= scale);
+        }
     }
 
     fn steps_to(&mut self, until: u64) -> Result<(), String> {
@@ -376,21 +461,52 @@ impl<E: Exchange> Domain<E> {
                 let i = a[0] as usize;
                 (s.x[i], s.v[i]) = ([a[1], a[2], a[3]], [a[4], a[5], a[6]]);
             }
+            s.chain.clone_from(&self.local.chain);
             set_step(s, self.step, self.dt);
         }
     }
 
-    /// Follows rank 0's run loop on another rank: advances where it says, until it says stop.
+    /// The whole system's potential energy and virial at the state reached (a collective): a
+    /// rank whose part cannot be evaluated sends NaN, so that every rank fails alike.
+    fn measure(&mut self) -> Result<EnergyAndVirial, String> {
+        let n = self.owned.len();
+        let mine = match self.graph.owned_sums(&self.local, n) {
+            Some(Ok(sums)) => sums,
+            Some(Err(e)) => {
+                eprintln!("lagra (rank {}): measuring at step {}: {e}", self.ex.rank(), self.step);
+                [f64::NAN; 2]
+            }
+            None => [f64::NAN; 2],
+        };
+        let all = self.talk(|ex, _| ex.all_gather(&mine));
+        let (mut potential, mut virial) = (Sum::default(), Sum::default());
+        all.chunks_exact(2).for_each(|p| (potential.add(p[0]), virial.add(p[1])).1);
+        let m = EnergyAndVirial { potential: potential.value(), virial: virial.value() };
+        match m.potential.is_finite() && m.virial.is_finite() {
+            true => Ok(m),
+            false => Err(format!(
+                "the potential energy or virial at step {} is not finite on some rank (it says why on its stderr)",
+                self.step
+            )),
+        }
+    }
+
+    /// Follows rank 0's run loop on another rank: advances where it says (measuring where it
+    /// says), until it says stop.
     pub fn follow(mut self) {
         loop {
-            let mut until = 0;
+            let (mut until, mut measure) = (0, 0);
             self.ex.broadcast(&mut until);
             if until == STOP {
                 return;
             }
+            self.ex.broadcast(&mut measure);
             // a failure is rank 0's to report: every rank knows it and stops at the same step
             let _ = self.steps_to(until);
             self.gather(None);
+            if measure == 1 {
+                let _ = self.measure();
+            }
         }
     }
 
@@ -403,12 +519,14 @@ impl<E: Exchange> Domain<E> {
 }
 
 impl<E: Exchange> Shared for Domain<E> {
-    fn advance_to(&mut self, s: &mut State, until: u64) -> Result<(), String> {
-        let mut u = until;
+    fn advance_to(&mut self, s: &mut State, until: u64, measure: bool) -> Result<Option<EnergyAndVirial>, String> {
+        let (mut u, mut m) = (until, u64::from(measure));
         self.ex.broadcast(&mut u);
+        self.ex.broadcast(&mut m);
         let done = self.steps_to(until);
         self.gather(Some(s));
-        done
+        let measured = measure.then(|| self.measure()).transpose();
+        done.and(measured)
     }
 
     fn plan(&self) -> String {
@@ -416,7 +534,7 @@ impl<E: Exchange> Shared for Domain<E> {
         let [px, py, pz] = self.bricks.counts;
         let total = t.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         format!(
-            "domains: {px}×{py}×{pz} bricks on {} ranks, halo {:.3} (reach {} + skin {:.3}); ghosts chosen {} time(s), \
+            "domains: {px}×{py}×{pz} bricks on {} ranks, halo {:.3} (reach {} + skin {:.3}){}; ghosts chosen {} time(s), \
              {:.0}% as many ghosts as owned atoms on rank 0; rank 0 spent {:.3} s of {:.3} s in exchanges (its waits \
              for the other ranks included), {:.3} s moving atoms and choosing ghosts, {:.3} s in forces; rank 0's \
              forces since its ghosts were last chosen: {}",
@@ -424,6 +542,7 @@ impl<E: Exchange> Shared for Domain<E> {
             self.halo,
             self.reach,
             self.halo - self.reach,
+            self.bath.said(),
             t.regroups,
             100.0 * t.ghosts as f64 / t.owned.max(1) as f64,
             t.talking,

@@ -174,7 +174,7 @@ fn every_step_each_owned_atom_feels_the_force_of_the_whole_system() {
         scope.spawn(move || Domain::new(job.next().unwrap(), scene, &s0, None, 1).unwrap().follow());
         let mut d = Domain::new(root, scene, &s, None, 1).unwrap();
         for step in 1..=100 {
-            d.advance_to(&mut s, step).unwrap();
+            d.advance_to(&mut s, step, false).unwrap();
             whole.forces(&s, &mut f).unwrap();
             for (k, &i) in d.owned.iter().enumerate() {
                 let off = (0..3).map(|c| (d.f[k][c] - f[i][c]).abs()).fold(0.0, f64::max);
@@ -263,5 +263,82 @@ fn a_restart_made_on_two_ranks_goes_on_on_three_or_in_one_process() {
         assert!(passed(rep), "{name}: {:?}", rep.outcome.verdicts);
         let dx = largest_difference(&rep.state.x, &alone.state.x);
         assert!(dx < 1e-10, "{name}: |Δx| {dx:e} from the uninterrupted run");
+    }
+}
+
+/// The hot liquid inside a thermostat: a Nosé–Hoover chain (its H′ and momentum claimed) or a
+/// Langevin bath (which allows no conservation claim).
+fn thermostatted(cells: usize, steps: u64, bath: &str) -> Scene {
+    let claims = match bath.starts_with("nose_hoover") {
+        true => "@expect energy_conservation { tol: 5e-3, every: 20 } @expect momentum_conservation { every: 20 }",
+        false => "",
+    };
+    crate::compile(&format!(
+        "scene l {{ entity atom {{ mass: 1 }}
+           lattice {{ type: atom, kind: fcc, density: 0.8442, cells: [{cells}, {cells}, {cells}], temperature: 2.5, seed: 5, velocities: uniform }}
+           interaction lj_shifted {{ epsilon: 1, sigma: 1, cutoff: 2.5 }}
+           thermostat {bath}
+           {claims}
+           solver {{ dt: 0.005, steps: {steps} }} }}"
+    ))
+    .unwrap()
+}
+
+const BATHS: [&str; 2] = ["nose_hoover { T: 1.0, tau: 0.1 }", "langevin { T: 1.0, gamma: 2, seed: 9 }"];
+
+#[test]
+fn a_thermostat_in_one_domain_steps_the_one_process_bits() {
+    for bath in BATHS {
+        let scene = thermostatted(6, 60, bath);
+        let alone = run(&scene, Options::plain(None)).unwrap();
+        let mut d = Domain::new(Alone, &scene, &lagra_kernel::setup::start(&scene), None, 1).unwrap();
+        let shared = run(&scene, Options { shared: Some(&mut d), ..Options::plain(None) }).unwrap();
+        assert_eq!(differing(&shared.state, &alone.state), 0, "{bath}");
+        assert_eq!(shared.state.chain, alone.state.chain, "{bath}");
+        // a thermostat samples the observables (every 10 steps): measured on the gathered state
+        let seen = |r: &Report| serde_json::to_string(&r.observables).unwrap();
+        assert!(alone.observables.as_ref().is_some_and(|o| o.kinetic_temperature.samples == 7), "{bath}");
+        assert_eq!(seen(&shared), seen(&alone), "{bath}");
+        assert_eq!(shared.outcome.verdicts.len(), alone.outcome.verdicts.len());
+        assert!(shared.outcome.verdicts.iter().all(|v| matches!(v, lagra_checker::decision::Verdict::Pass(_))));
+    }
+}
+
+#[test]
+fn a_thermostat_on_several_ranks_follows_the_one_process_run_to_round_off() {
+    for bath in BATHS {
+        let scene = thermostatted(12, 60, bath);
+        let alone = run(&scene, Options::plain(None)).unwrap();
+        let chained = bath.starts_with("nose_hoover");
+        assert!(!chained || alone.state.chain.iter().any(|l| l[1] != 0.0), "the chain moved");
+        assert!(!chained || passed(&alone), "{:?}", alone.outcome.verdicts);
+        for ranks in [2, 3] {
+            let (rep, regroups) = in_domains(&scene, ranks, None, 1);
+            assert!(regroups > 1, "{bath}, {ranks} ranks");
+            if chained {
+                assert!(passed(&rep), "{bath}, {ranks} ranks: {:?}", rep.outcome.verdicts);
+                let dl = rep
+                    .state
+                    .chain
+                    .iter()
+                    .zip(&alone.state.chain)
+                    .map(|(a, b)| (a[1] - b[1]).abs())
+                    .fold(0.0, f64::max);
+                assert!(dl < 1e-10, "{bath}, {ranks} ranks: the links' velocities off by {dl:e}");
+            }
+            // a chain's kinetic energy summed over the ranks, or an atom's noise drawn for its
+            // place on its rank, would be off by far more than round-off
+            let dx = largest_difference(&rep.state.x, &alone.state.x);
+            let dv = largest_difference(&rep.state.v, &alone.state.v);
+            assert!(dx < 1e-10 && dv < 1e-9, "{bath}, {ranks} ranks: |Δx| {dx:e}, |Δv| {dv:e}");
+            let [a, b] = [&rep, &alone].map(|r| r.observables.as_ref().unwrap());
+            for (p, q) in [
+                (a.kinetic_temperature.mean, b.kinetic_temperature.mean),
+                (a.potential_energy_per_body.mean, b.potential_energy_per_body.mean),
+                (a.pressure.as_ref().unwrap().mean, b.pressure.as_ref().unwrap().mean),
+            ] {
+                assert!((p - q).abs() < 1e-10 * q.abs(), "{bath}, {ranks} ranks: sampled {p} against {q}");
+            }
+        }
     }
 }
