@@ -15,6 +15,7 @@
 //!   v½ = v₀ + (h/m)·F₀,   x₁ = x₀ + dt·v½,   v₁ = v½ + (h/m)·F(x₁, v₁)   (implicit in v₁ only
 //!   for velocity-dependent forces, as the solver solves it).
 
+mod kicks;
 mod objective;
 
 pub use objective::{Objective, Quantity};
@@ -153,10 +154,6 @@ fn failed(step: u64) -> impl Fn(lagra_kernel::solvers::Failure) -> String {
     move |e| format!("the run failed at step {step}: {e}")
 }
 
-fn norm(a: &Adjoint) -> f64 {
-    a.x.iter().chain(&a.v).flatten().map(|c| c * c).sum::<f64>().sqrt()
-}
-
 /// The gradient by the chosen method.
 pub fn gradient(mut r: Request, method: Method) -> Result<Gradient, String> {
     let run = Run::new(&r)?;
@@ -225,7 +222,8 @@ fn reverse(
     // the adjoint of the last state, then back one state at a time
     let mut lam = run.zero();
     run.objective_gradient(objective, &s, &mut lam)?;
-    let (start_norm, mut largest) = (norm(&lam).max(f64::MIN_POSITIVE), 1.0f64);
+    let (start_norm, mut largest) = (kicks::norm(g, &lam).max(f64::MIN_POSITIVE), 1.0f64);
+    let mut scratch = kicks::Scratch::new(run);
     let mut opening = vec![[0.0; 3]; s.x.len()];
     let mut replayed = Replayed { states: vec![], lists: vec![], current: None.into() };
     let velocity = g.velocity_dependent();
@@ -253,23 +251,26 @@ fn reverse(
             }
             break;
         }
-        // the closing kick of step `step − 1`: μ with μ = λ_v + (∂F/∂v)ᵀ(h/m)μ
-        let mu = if velocity { implicit_adjoint(run, state, &lam.v)? } else { lam.v.clone() };
-        let covector: Vec<[f64; 3]> = if velocity {
-            mu.clone()
+        // the closing kick of step `step − 1` and its drift
+        if velocity {
+            // μ with μ = λ_v + (∂F/∂v)ᵀ(h/m)μ, the covector of the kick
+            let mu = implicit_adjoint(run, state, &lam.v)?;
+            let mut pb = run.zero();
+            g.pullback(state, &run.kick(&mu), &run.wanted, &mut pb).map_err(|e| e.to_string())?;
+            add_into(&mut lam, &pb, false);
+            masses_through_kick(run, &mut lam, &at.f, &mu);
+            opening = mu.iter().zip(&lam.x).map(|(m, x)| std::array::from_fn(|c| m[c] + dt * x[c])).collect();
+            lam.v.clone_from(&opening);
         } else {
-            mu.iter().zip(&opening).map(|(a, b)| std::array::from_fn(|c| a[c] + b[c])).collect()
-        };
-        let mut pb = run.zero();
-        g.pullback(state, &run.kick(&covector), &run.wanted, &mut pb).map_err(|e| e.to_string())?;
-        add_into(&mut lam, &pb, false);
-        masses_through_kick(run, &mut lam, &at.f, &covector);
-        // the drift of step − 1, then the state before it
-        opening = mu.iter().zip(&lam.x).map(|(m, x)| std::array::from_fn(|c| m[c] + dt * x[c])).collect();
-        lam.v = opening.clone();
+            // the covector λ_v plus the opening kick's of the step after, then the drift
+            scratch.closing_kick(run, &lam.v, &opening);
+            g.pullback(state, &scratch.kicked, &run.wanted, &mut scratch.pb).map_err(|e| e.to_string())?;
+            kicks::closing_and_drift(run, &mut lam, &scratch.pb, &at.f, &mut opening);
+        }
+        // the state before it
         replayed.lists_at(g, step - 1);
         run.objective_gradient(objective, &replayed.find(step - 1).0, &mut lam)?;
-        largest = largest.max(norm(&lam) / start_norm);
+        largest = largest.max(kicks::norm(g, &lam) / start_norm);
         tell("backward", n - step + 1, n);
     }
     let time = n as f64 * dt;
