@@ -8,9 +8,13 @@ use lagra_lang::params;
 use proptest::prelude::*;
 
 fn grad(scene: &Scene, objective: &str, wrt: &str, method: Method) -> Gradient {
+    grad_on(scene, objective, wrt, method, 1)
+}
+
+fn grad_on(scene: &Scene, objective: &str, wrt: &str, method: Method, threads: usize) -> Gradient {
     let objective = Objective::parse(objective, scene).unwrap();
     let wrt = params::parse_list(wrt, scene).unwrap();
-    gradient(Request { scene, objective: &objective, wrt: &wrt, threads: 1, progress: None }, method).unwrap()
+    gradient(Request { scene, objective: &objective, wrt: &wrt, threads, progress: None }, method).unwrap()
 }
 
 /// The central difference of the objective along each parameter, and an estimate of its
@@ -144,10 +148,8 @@ fn a_big_liquid_gives_the_same_gradient_on_any_number_of_threads() {
     .unwrap();
     let wrt = "lj_force_shifted.epsilon,lj_force_shifted.sigma,lj_force_shifted.cutoff,body[7].position.y";
     let on = |threads: usize| {
-        let objective = Objective::parse("position[3].x@end", &scene).unwrap();
-        let wrt = params::parse_list(wrt, &scene).unwrap();
-        let r = Request { scene: &scene, objective: &objective, wrt: &wrt, threads, progress: None };
-        gradient(r, Method::Reverse).unwrap().gradient.iter().map(|g| g.1.to_bits()).collect::<Vec<_>>()
+        let g = grad_on(&scene, "position[3].x@end", wrt, Method::Reverse, threads);
+        g.gradient.iter().map(|g| g.1.to_bits()).collect::<Vec<_>>()
     };
     let one = on(1);
     assert!(on(2) == one && on(3) == one);
@@ -173,12 +175,7 @@ fn the_passes_between_pullbacks_spread_with_the_same_bits() {
     .unwrap();
     assert_eq!(scene.x0.len(), 16_384);
     let wrt = "lj_force_shifted.epsilon,body[5].mass";
-    let on = |threads: usize| {
-        let objective = Objective::parse("energy@end", &scene).unwrap();
-        let wrt = params::parse_list(wrt, &scene).unwrap();
-        let r = Request { scene: &scene, objective: &objective, wrt: &wrt, threads, progress: None };
-        gradient(r, Method::Reverse).unwrap()
-    };
+    let on = |threads: usize| grad_on(&scene, "energy@end", wrt, Method::Reverse, threads);
     let (one, three) = (on(1), on(3));
     let bits = |g: &Gradient| g.gradient.iter().map(|g| g.1.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&one), bits(&three));
