@@ -11,7 +11,7 @@ use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
 use crate::outward::Outward;
-use crate::quantities::{foresee, pair_reaches, Lifted, PairSum};
+use crate::quantities::{foresee, pair_reaches, Lifted, PairSum, Parts, Whole};
 use crate::states::State;
 use crate::terms::{Kind, Site};
 use serde::{Deserialize, Serialize};
@@ -100,6 +100,18 @@ pub struct Monitor {
     sites: Vec<Site<Outward>>,
     /// Where the marks go (`None`: the trails, in memory).
     sink: Option<MarkSink>,
+    parts: FromParts,
+}
+
+/// How often a run in domains had its energy and momentum judged from the ranks' parts
+/// (`observe_with`), and why they were last refused.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FromParts {
+    /// Checkpoints at which the parts stood for the whole.
+    pub used: u64,
+    /// Checkpoints at which they were refused (the whole state was evaluated instead).
+    pub refused: u64,
+    pub why: Option<String>,
 }
 
 /// What the checker concluded about a run.
@@ -108,18 +120,35 @@ pub struct Outcome {
     pub trails: Vec<Trail>,
     /// Dissipative terms that removed energy (the energy claim was then a balance).
     pub dissipators: Vec<Kind>,
+    pub parts: FromParts,
+}
+
+/// The components a claim keeps of a vector quantity.
+fn axes<E>(c: &Claim, v: [E; 3]) -> Vec<E> {
+    let keep = c.axes.unwrap_or([true; 3]);
+    v.into_iter().zip(keep).filter(|p| p.1).map(|p| p.0).collect()
+}
+
+/// The quantity a dynamic claim is about, from the ranks' parts where they give it (energy,
+/// with the thermostat's share added here, and momentum), else `None`.
+fn from_parts(c: &Claim, w: &Whole, model: &Model, s: &Snapshot) -> Option<Vec<Outward>> {
+    let zero = Outward::point(0.0);
+    let links: Vec<[Outward; 2]> = s.chain.iter().map(|l| l.map(Outward::point)).collect();
+    match c.kind {
+        ClaimKind::EnergyConservation => {
+            Some(vec![w.energy + model.thermostat.as_ref().map_or(zero, |t| t.energy(&links, &zero))])
+        }
+        ClaimKind::MomentumConservation => Some(axes(c, w.momentum)),
+        _ => None,
+    }
 }
 
 /// The quantity a dynamic claim is about.
 fn measure<E: Enclosure + PairSum>(c: &Claim, q: &Lifted<E>, model: &Model, s: &Snapshot) -> Vec<E> {
-    let axes = |v: [E; 3]| -> Vec<E> {
-        let keep = c.axes.unwrap_or([true; 3]);
-        v.into_iter().zip(keep).filter(|p| p.1).map(|p| p.0).collect()
-    };
     match c.kind {
         ClaimKind::EnergyConservation => vec![q.energy(model)],
-        ClaimKind::MomentumConservation => axes(q.momentum(model)),
-        ClaimKind::AngularMomentumConservation => axes(q.angular_momentum(model)),
+        ClaimKind::MomentumConservation => axes(c, q.momentum(model)),
+        ClaimKind::AngularMomentumConservation => axes(c, q.angular_momentum(model)),
         ClaimKind::Distance => {
             c.between.as_ref().map(|b| vec![q.distance(b.bodies[0], b.bodies[1])]).unwrap_or_default()
         }
@@ -173,8 +202,8 @@ impl Monitor {
             .collect();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let ahead = Arc::default();
-        let (reference, ledger, sites, sink) = (None, None, vec![], None);
-        Ok(Monitor { model, tracks, last_step, reference, balance, ledger, threads, ahead, sites, sink })
+        let (reference, ledger, sites, sink, parts) = (None, None, vec![], None, FromParts::default());
+        Ok(Monitor { model, tracks, last_step, reference, balance, ledger, threads, ahead, sites, sink, parts })
     }
 
     /// A monitor that goes on from where `carried` left one of the same model and claims (a
@@ -259,6 +288,14 @@ impl Monitor {
     /// energy balance every step must be handed in: the dissipated energy is integrated over all
     /// of them, whatever the claim's `every`.
     pub fn observe(&mut self, s: &Snapshot) -> Result<(), Halt> {
+        self.observe_with(s, None)
+    }
+
+    /// `observe`, with the energy and momentum enclosed by the ranks of a run in domains, each
+    /// its part (`Parts`): used where they stand for the whole (`Parts::whole`), the whole
+    /// state evaluated here where they do not, at the first state, and for the other claims. A
+    /// checkpoint the parts' binary64 enclosure cannot decide is re-evaluated whole with MPFR.
+    pub fn observe_with(&mut self, s: &Snapshot, parts: Option<&Parts>) -> Result<(), Halt> {
         let last = self.last_step;
         // a resting claim speaks of the states from its time on
         let due = |t: &Track| {
@@ -275,20 +312,38 @@ impl Monitor {
             }
             return Err(Halt::InvalidState(e));
         }
-        let q = Lifted::reusing(std::mem::take(&mut self.sites), &self.model, s, &Outward::NAN)
-            .on_threads(self.threads)
-            .foreseeing(self.ahead.clone());
         let model = &self.model;
         let first_state = self.reference.is_none();
+        let whole = match parts.filter(|_| !first_state).map(|p| p.whole(model)) {
+            Some(Ok(w)) => Some(w),
+            Some(Err(why)) => {
+                self.parts.refused += 1;
+                self.parts.why = Some(why);
+                None
+            }
+            None => None,
+        };
+        let given = |t: &Track| whole.as_ref().and_then(|w| from_parts(&t.claim, w, model, s));
+        let evaluated =
+            first_state || self.ledger.is_some() || self.tracks.iter().any(|t| due(t) && given(t).is_none());
+        let q = evaluated.then(|| {
+            Lifted::reusing(std::mem::take(&mut self.sites), model, s, &Outward::NAN)
+                .on_threads(self.threads)
+                .foreseeing(self.ahead.clone())
+        });
+        let lifted = || q.as_ref().expect("evaluated where a quantity is not given");
+        if whole.is_some() {
+            self.parts.used += 1;
+        }
         if first_state {
             if self.balance {
                 self.ledger =
-                    Some(Ledger { t: s.t, power: q.dissipated_power(model), dissipated: Outward::point(0.0) });
+                    Some(Ledger { t: s.t, power: lifted().dissipated_power(model), dissipated: Outward::point(0.0) });
             }
-            let measures = self.tracks.iter().map(|t| measure(&t.claim, &q, model, s)).collect();
+            let measures = self.tracks.iter().map(|t| measure(&t.claim, lifted(), model, s)).collect();
             self.reference = Some(Reference { state: State::from(s), measures });
         } else if let Some(l) = &mut self.ledger {
-            let power = q.dissipated_power(model);
+            let power = lifted().dissipated_power(model);
             l.dissipated =
                 l.dissipated + (Outward::point(s.t) - Outward::point(l.t)) * (l.power + power) * Outward::point(0.5);
             (l.t, l.power) = (s.t, power);
@@ -314,8 +369,8 @@ impl Monitor {
                 }
             };
             let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision: BINARY64 };
-            (mark.lo, mark.hi) =
-                deviation(&t.claim, measure(&t.claim, &q, model, s), r.measures[n].clone(), dissipated).bounds();
+            let now = given(t).unwrap_or_else(|| measure(&t.claim, lifted(), model, s));
+            (mark.lo, mark.hi) = deviation(&t.claim, now, r.measures[n].clone(), dissipated).bounds();
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
                 mark = escalate(model, r, s, &t.claim, self.threads, dissipated, tol);
             }
@@ -328,7 +383,9 @@ impl Monitor {
                 first.get_or_insert(Halt::Breach(b));
             }
         }
-        self.sites = q.into_sites();
+        if let Some(q) = q {
+            self.sites = q.into_sites();
+        }
         first.map_or(Ok(()), Err)
     }
 
@@ -347,7 +404,7 @@ impl Monitor {
             });
             trails.push(Trail { claim: t.claim.kind, marks: t.marks });
         }
-        Outcome { verdicts, trails, dissipators }
+        Outcome { verdicts, trails, dissipators, parts: self.parts }
     }
 }
 

@@ -9,6 +9,7 @@ use std::borrow::Cow;
 use std::sync::Arc;
 
 mod pair_sums;
+mod parts;
 
 /// Bodies from which a checkpoint's pair sums spread over the helpers (`Lifted::on_threads`):
 /// handing a sum out and waking the helpers costs tens of microseconds. Measured (2-CPU AMD
@@ -18,6 +19,7 @@ mod pair_sums;
 const SPREAD_FROM: usize = 512;
 
 pub use pair_sums::{asked_reach, foresee, helpers_started, pair_reaches, PairSum};
+pub use parts::{Local, Part, Parts, Region, Whole, PART_BITS};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).
 pub struct Lifted<R> {

@@ -137,7 +137,7 @@ const CHUNK: usize = 128;
 /// `f(k)` for k in 0..n, in order of k, computed on up to `threads` of the helpers (helper w
 /// takes k ≡ w mod threads). Which helper computes which k changes nothing: each result is
 /// put back at its k.
-fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+pub(super) fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     let threads = threads.clamp(1, n.max(1));
     let Some(pool) = (threads > 1).then(helpers).flatten() else {
         return (0..n).map(f).collect();
