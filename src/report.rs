@@ -59,6 +59,10 @@ pub struct Summary {
     /// The helper threads the checker started for its sums: 0 where no checkpoint was big enough
     /// to spread, else one pool for the whole run (never a thread per checkpoint).
     pub checker_helpers: usize,
+    /// In domains, how the energy and momentum were judged: from the ranks' parts at how many
+    /// checkpoints, and where the parts were refused, why (`None` outside domains).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub checker_parts: Option<String>,
     /// Print the plan in the text report too (`--explain`).
     #[serde(skip)]
     explain: bool,
@@ -133,6 +137,7 @@ impl Summary {
                 .collect(),
             checker: r.checker,
             checker_helpers: lagra_checker::quantities::helpers_started(),
+            checker_parts: parts_said(&r.outcome.parts),
             explain,
             claims,
             predictions: r.predictions.clone(),
@@ -191,6 +196,9 @@ impl Summary {
                 let _ = writeln!(s, "plan        {kind}: {plan}");
             }
             let _ = writeln!(s, "plan        checker: {}", self.checker);
+            if let Some(p) = &self.checker_parts {
+                let _ = writeln!(s, "plan        checker: {p}");
+            }
         }
         if self.generated > 0 {
             let _ = writeln!(
@@ -281,4 +289,19 @@ fn observables(s: &mut String, o: &Observables) {
     for n in &o.notes {
         let _ = writeln!(s, "  ({n})");
     }
+}
+
+/// What `--explain` says of the checkpoints judged from the ranks' parts (`None`: none was
+/// offered them, as outside domains).
+fn parts_said(p: &lagra_checker::monitor::FromParts) -> Option<String> {
+    (p.used + p.refused > 0).then(|| {
+        let refused = match (&p.why, p.refused) {
+            (Some(why), n) if n > 0 => format!("; refused at {n} (the whole state judged there instead): {why}"),
+            _ => String::new(),
+        };
+        format!(
+            "energy and momentum enclosed by each rank over its own atoms and added outward at {} checkpoint(s){refused}",
+            p.used
+        )
+    })
 }

@@ -5,7 +5,7 @@
 
 use crate::checksum::{label, Fnv};
 use crate::claims::{Claim, ClaimKind};
-use crate::decision::Precision;
+use crate::decision::{Precision, PARTS};
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
 
@@ -41,6 +41,17 @@ impl Mark {
     pub fn same(&self, o: &Mark) -> bool {
         let bits = |m: &Mark| (m.step, m.lo.to_bits(), m.hi.to_bits(), m.tol.to_bits(), m.precision);
         bits(self) == bits(o)
+    }
+
+    /// A mark added up from the ranks' parts of a run in domains (`PARTS`) and `o`, re-derived
+    /// from the whole state at the same step against the same tolerance: two enclosures of one
+    /// quantity, so they must meet.
+    pub fn meets(&self, o: &Mark) -> bool {
+        self.precision == PARTS
+            && self.step == o.step
+            && self.tol.to_bits() == o.tol.to_bits()
+            && self.lo <= o.hi
+            && o.lo <= self.hi
     }
 }
 

@@ -68,6 +68,11 @@ mod proofs {
 /// intervals, more for MPFR intervals.
 pub type Precision = u32;
 pub const BINARY64: Precision = 53;
+/// Binary64 intervals added up from the ranks' parts of a run in domains (`quantities::Parts`).
+/// Numbered below binary64, so that a verdict's precision (the highest any checkpoint needed)
+/// stays binary64's; a re-check from the whole states derives another enclosure of the same
+/// quantity, which must meet this one.
+pub const PARTS: Precision = 52;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Pass {

@@ -6,7 +6,7 @@
 use crate::broad_phase::{Foreseen, FORESIGHT};
 use crate::certificate::{Mark, Trail};
 use crate::claims::{Claim, ClaimKind};
-use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, Verdict, BINARY64};
+use crate::decision::{classify, decide_static, Breach, Class, Judge, Precision, Verdict, BINARY64, PARTS};
 use crate::enclosure::Enclosure;
 use crate::model::{Model, Snapshot};
 use crate::mpfi::Mpfi;
@@ -368,9 +368,20 @@ impl Monitor {
                     budget(t, s.step)
                 }
             };
-            let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision: BINARY64 };
-            let now = given(t).unwrap_or_else(|| measure(&t.claim, lifted(), model, s));
+            let (now, precision) = match given(t) {
+                Some(now) => (now, PARTS),
+                None => (measure(&t.claim, lifted(), model, s), BINARY64),
+            };
+            let mut mark = Mark { step: s.step, lo: 0.0, hi: 0.0, tol, precision };
             (mark.lo, mark.hi) = deviation(&t.claim, now, r.measures[n].clone(), dissipated).bounds();
+            // the parts decide a pass; anything else is decided on the whole state, so that a
+            // failure is re-derived to the bit from the states alone
+            if precision == PARTS && classify(mark.lo, mark.hi, tol) != Class::Within {
+                let whole = Lifted::new(model, s, &Outward::NAN).on_threads(self.threads);
+                let now = measure(&t.claim, &whole, model, s);
+                (mark.lo, mark.hi) = deviation(&t.claim, now, r.measures[n].clone(), dissipated).bounds();
+                mark.precision = BINARY64;
+            }
             if classify(mark.lo, mark.hi, tol) == Class::Straddles {
                 mark = escalate(model, r, s, &t.claim, self.threads, dissipated, tol);
             }

@@ -1,7 +1,7 @@
 //! Verdicts as one line of text each; `lagra run` and a re-check print the same lines.
 
 use crate::claims::{Claim, ClaimKind};
-use crate::decision::{Precision, Verdict, BINARY64};
+use crate::decision::{Precision, Verdict, BINARY64, PARTS};
 use crate::terms::Kind;
 
 /// `x` in scientific notation with a two-digit exponent (`1e-05`), exactly as given.
@@ -17,10 +17,10 @@ pub fn sci(x: f64) -> String {
 
 /// `interval` for binary64 intervals, `mpfr N` for MPFR intervals of N bits.
 pub fn method(p: Precision) -> String {
-    if p == BINARY64 {
-        "interval".into()
-    } else {
-        format!("mpfr {p}")
+    match p {
+        BINARY64 => "interval".into(),
+        PARTS => "interval, the ranks' parts added".into(),
+        p => format!("mpfr {p}"),
     }
 }
 

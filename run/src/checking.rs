@@ -8,6 +8,7 @@
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 use lagra_checker::monitor::{is_balance, next_checkpoint, Halt, Monitor};
+use lagra_checker::quantities::Parts;
 use lagra_kernel::state::State;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
@@ -33,8 +34,8 @@ pub enum Checking<'s> {
 
 /// What the checker thread is handed.
 enum Handed {
-    /// A checkpoint, to judge.
-    Checkpoint(State),
+    /// A checkpoint, to judge, and in domains the ranks' parts of it.
+    Checkpoint(State, Option<Parts>),
     /// A state before the last checkpoint, to list its pairs from.
     Ahead(State),
 }
@@ -69,18 +70,18 @@ impl<'s> Checking<'s> {
             for handed in inbox {
                 // CPU time (on one CPU the thread shares it with the kernel's)
                 let started = (cpu_time::ThreadTime::now(), std::time::Instant::now());
-                let s = match handed {
+                let (s, parts) = match handed {
                     Handed::Ahead(s) => {
                         monitor.foresee(&s.snapshot());
                         busy += started.0.elapsed().as_secs_f64();
                         continue;
                     }
-                    Handed::Checkpoint(s) => s,
+                    Handed::Checkpoint(s, parts) => (s, parts),
                 };
                 // one thread while the kernel steps on; every CPU for the last checkpoint, which
                 // nothing else overlaps
                 monitor.set_threads(if s.step == last { cpus } else { 1 });
-                let verdict = monitor.observe(&s.snapshot()).map_err(|h| (h, s));
+                let verdict = monitor.observe_with(&s.snapshot(), parts.as_ref()).map_err(|h| (h, s));
                 // but wall time where the sums spread over every CPU (the last checkpoint, which
                 // the kernel waits for): this thread's CPU time would miss its helpers'
                 let took = if monitor.threads() > 1 { started.1.elapsed() } else { started.0.elapsed() };
@@ -94,14 +95,15 @@ impl<'s> Checking<'s> {
         Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, ahead, thread })
     }
 
-    /// Shows the checker a state. Inline, the answer is about this state; overlapped, it is
-    /// about the checkpoint before, and a breach comes with that checkpoint's state.
-    pub fn show(&mut self, s: &State) -> Result<(), Breach> {
+    /// Shows the checker a state, and in domains the ranks' parts of it (`Monitor::observe_with`).
+    /// Inline, the answer is about this state; overlapped, it is about the checkpoint before,
+    /// and a breach comes with that checkpoint's state.
+    pub fn show(&mut self, s: &State, parts: Option<Parts>) -> Result<(), Breach> {
         match self {
-            Checking::Inline(m) => m.observe(&s.snapshot()).map_err(|h| (h, s.clone())),
+            Checking::Inline(m) => m.observe_with(&s.snapshot(), parts.as_ref()).map_err(|h| (h, s.clone())),
             Checking::Overlapped(o) if s.step == 0 || o.next_checkpoint(s.step - 1) == s.step => {
                 o.settle()?;
-                o.hand(Handed::Checkpoint(s.clone()));
+                o.hand(Handed::Checkpoint(s.clone(), parts));
                 o.pending = true;
                 Ok(())
             }

@@ -3,11 +3,12 @@
 //! state halts the run at that step.
 
 use crate::checking::{can_overlap, Checking};
-use crate::domains::{EnergyAndVirial, Shared};
+use crate::domains::{Asks, EnergyAndVirial, Reached, Shared};
 use crate::observables::{Observables, Observer};
 use crate::predict::Meter;
 use crate::restart::{setup_of, Restart};
 use crate::trace::Frames;
+use lagra_checker::claims::ClaimKind;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
 use lagra_checker::terms::Kind;
@@ -219,6 +220,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     // are evaluated whole here, as a run in one process stopped there would have them, so that
     // a restart made on some ranks resumes on any number, or in one process.
     let in_domains = shared.is_some();
+    // in domains the ranks enclose their parts of the energy and momentum at their checkpoints
+    let additive = |k: ClaimKind| matches!(k, ClaimKind::EnergyConservation | ClaimKind::MomentumConservation);
+    let in_parts = in_domains && scene.claims.iter().any(|c| additive(c.kind));
     let solver_carries = |solver: &Stepper, s: &State| match in_domains {
         true => Evaluated::at(&graph, s).map(|at| Carried::forces(&at)).map_err(|e| e.to_string()),
         false => solver.carried(),
@@ -255,7 +259,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let waited = std::cell::Cell::new(0.0);
     let judged = |since: Instant| waited.set(waited.get() + since.elapsed().as_secs_f64());
     // (a resumed run's first state was judged by the run that wrote the restart: recorded only)
-    let mut check = |checking: &mut Checking, s: &mut State, judge: bool| -> Result<Option<Stop>, String> {
+    let mut check = |checking: &mut Checking, s: &mut State, judge: bool, parts| -> Result<Option<Stop>, String> {
         if let Some(r) = record.as_mut() {
             r(&s.snapshot()).map_err(|e| format!("writing the states: {e}"))?;
         }
@@ -263,7 +267,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             return Ok(None);
         }
         let judging = Instant::now();
-        let shown = checking.show(s);
+        let shown = checking.show(s, parts);
         judged(judging);
         Ok(shown.err().map(|(halt, at)| {
             *s = at;
@@ -307,7 +311,9 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 let sampled_at_start = carried.is_none() && observer.as_ref().is_some_and(|o| o.due(state.step));
                 let here = state.step;
                 let at_start = match shared.as_mut() {
-                    Some(d) if tracing || sampled_at_start => d.advance_to(&mut state, here, true)?,
+                    Some(d) if tracing || sampled_at_start => {
+                        d.advance_to(&mut state, here, Asks { measure: true, enclose: false })?.measured
+                    }
                     _ => None,
                 };
                 match &carried {
@@ -316,10 +322,10 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         if shared.is_none() {
                             solver.take_up(c, &graph).map_err(|e| format!("the restart: {e}"))?;
                         }
-                        check(&mut checking, &mut state, false)?;
+                        check(&mut checking, &mut state, false, None)?;
                     }
                     None => {
-                        stop = check(&mut checking, &mut state, true)?;
+                        stop = check(&mut checking, &mut state, true, None)?;
                         meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                         sample(&mut observer, &state, potential(at_start, &solver), at_start)?;
                     }
@@ -341,18 +347,23 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                     let to = until.min(end);
                     let advanced = match shared.as_mut() {
                         Some(d) => {
-                            d.advance_to(&mut state, to, observer.as_ref().is_some_and(|o| o.due(to)) || framed(to))
+                            let measure = observer.as_ref().is_some_and(|o| o.due(to)) || framed(to);
+                            let enclose = in_parts && checking.next_due(state.step) == to;
+                            d.advance_to(&mut state, to, Asks { measure, enclose })
                         }
-                        None => solver.advance_to(&graph, &mut state, dt, to).map(|_| None).map_err(|e| e.to_string()),
+                        None => solver
+                            .advance_to(&graph, &mut state, dt, to)
+                            .map(|_| Reached::default())
+                            .map_err(|e| e.to_string()),
                     };
-                    let measured = match advanced {
-                        Ok(m) => m,
+                    let (measured, parts) = match advanced {
+                        Ok(r) => (r.measured, r.parts),
                         Err(message) => {
                             stop = Some(Stop::Solver { step: state.step + 1, message });
                             break;
                         }
                     };
-                    stop = check(&mut checking, &mut state, true)?;
+                    stop = check(&mut checking, &mut state, true, parts)?;
                     // (the domains' forces were tested finite on their ranks)
                     if stop.is_none() && shared.is_none() && !solver.potential().is_finite() {
                         stop = non_finite(&state);

@@ -258,6 +258,9 @@ fn restricts(l: &Local) -> Result<(), String> {
     if l.state.x.len() != len || l.state.v.len() != len || l.numbers.len() != len || l.owned > len {
         return Err("the rank's state, numbers and bodies differ in length".into());
     }
+    if !l.state.x.iter().chain(l.state.v).flatten().all(|c| c.is_finite()) {
+        return Err("the rank's state is not finite".into());
+    }
     let mut sorted = l.numbers.to_vec();
     sorted.sort_unstable();
     if sorted.windows(2).any(|p| p[0] == p[1]) || sorted.last().is_some_and(|&i| i >= w.bodies.len()) {

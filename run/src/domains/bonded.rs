@@ -44,10 +44,15 @@ impl Bonded {
         Bonded { terms, of, span }
     }
 
-    /// The instances with an atom among `owned`, in the model's order, their atoms renumbered to
-    /// their local places (`place`). An instance with an atom not local: its two atoms that are
-    /// farthest apart along the instance, the one owned first.
-    pub fn local(&self, owned: &[usize], place: &HashMap<usize, usize>) -> Result<Vec<TermInstance>, [usize; 2]> {
+    /// The instances with an atom among `owned`, in the model's order, each with its number among
+    /// the model's bonded instances and its atoms renumbered to their local places (`place`). An
+    /// instance with an atom not local: its two atoms that are farthest apart along the
+    /// instance, the one owned first.
+    pub fn local(
+        &self,
+        owned: &[usize],
+        place: &HashMap<usize, usize>,
+    ) -> Result<Vec<(usize, TermInstance)>, [usize; 2]> {
         let mut ks: Vec<u32> = owned.iter().flat_map(|&i| self.of[i].iter().copied()).collect();
         ks.sort_unstable();
         ks.dedup();
@@ -56,7 +61,7 @@ impl Bonded {
                 let t = &self.terms[k as usize];
                 let sites = t.sites.iter().map(|i| place.get(i).copied().ok_or(*i)).collect::<Result<Vec<_>, _>>();
                 match sites {
-                    Ok(sites) => Ok(TermInstance { sites, ..t.clone() }),
+                    Ok(sites) => Ok((k as usize, TermInstance { sites, ..t.clone() })),
                     Err(missing) => {
                         Err([*t.sites.iter().find(|i| owned.binary_search(i).is_ok()).unwrap_or(&t.sites[0]), missing])
                     }
@@ -107,10 +112,10 @@ mod tests {
         // atoms 1 and 2 owned, 0 and 3 ghosts
         let place = HashMap::from([(1, 0), (2, 1), (0, 2), (3, 3)]);
         let local = b.local(&[1, 2], &place).unwrap();
-        let sites: Vec<_> = local.iter().map(|t| (t.kind, t.sites.clone())).collect();
+        let sites: Vec<_> = local.iter().map(|(k, t)| (*k, t.kind, t.sites.clone())).collect();
         assert_eq!(
             sites,
-            [(Kind::HarmonicBond, vec![2, 0]), (Kind::FeneBond, vec![0, 1]), (Kind::HarmonicBond, vec![1, 3])]
+            [(0, Kind::HarmonicBond, vec![2, 0]), (1, Kind::FeneBond, vec![0, 1]), (2, Kind::HarmonicBond, vec![1, 3])]
         );
         let without = HashMap::from([(1, 0), (2, 1), (0, 2)]);
         assert_eq!(b.local(&[1, 2], &without).unwrap_err(), [2, 3]);

@@ -89,6 +89,13 @@ impl Bricks {
         k[0] + self.counts[0] * (k[1] + self.counts[1] * k[2])
     }
 
+    /// The middle of `rank`'s brick.
+    pub fn centre(&self, rank: usize) -> [f64; 3] {
+        let p = self.counts;
+        let k = [rank % p[0], rank / p[0] % p[1], rank / (p[0] * p[1])];
+        std::array::from_fn(|a| (k[a] as f64 + 0.5) * self.size[a] / p[a] as f64)
+    }
+
     /// The ranks whose bricks touch `rank`'s, across faces, edges and corners (through the
     /// periodic box), ascending, without `rank`: where its ghosts and migrants can go, since a
     /// brick is at least a halo wide.

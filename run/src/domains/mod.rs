@@ -21,12 +21,15 @@
 //! moved by the kinetic energy gathered from the ranks; a Langevin bath's noise drawn for each
 //! atom's number.
 //!
-//! The claims are judged by rank 0's ordinary checker on the whole state, gathered at each
-//! state it is shown (`Shared::advance_to`): a certificate is the one a single process would
-//! write for that state, re-checked by `lagra-check` anywhere. The cost: one gather of every
-//! atom's position and velocity to rank 0 per checkpoint, and the checker's work there. A trace
-//! frame's energy and a sample's potential energy and virial are the ranks' own sums
-//! (`EnergyAndVirial`), added on every rank.
+//! The claims are judged by rank 0's checker, on the whole state gathered at each state it is
+//! shown (`Shared::advance_to`), so that the certificate records every state a single process
+//! would and `lagra-check` re-checks it anywhere. At a checkpoint of energy or momentum each
+//! rank also encloses its own part of both with the checker's arithmetic (`enclose`: its atoms'
+//! kinetic energy and momentum, its pairs with a ghost counted half, the bonded instances whose
+//! first atom it owns), and rank 0's checker adds the parts outward where they cover the whole
+//! (`lagra_checker::quantities::Parts`): the checker's pair sums run on every rank over its own
+//! domain instead of on rank 0 over the whole. A trace frame's energy and a sample's potential
+//! energy and virial are the ranks' own f64 sums (`EnergyAndVirial`), added on every rank.
 
 pub mod bonded;
 pub mod bricks;
@@ -36,6 +39,7 @@ use bonded::Bonded;
 use bricks::Bricks;
 use exchange::Exchange;
 use lagra_checker::model::{Model, TermInstance};
+use lagra_checker::quantities::{Local, Part, Parts, Region, PART_BITS};
 use lagra_checker::terms::Shape;
 use lagra_kernel::forces::Pool;
 use lagra_kernel::graph::LagrangianGraph;
@@ -93,11 +97,37 @@ pub fn fits(scene: &Scene) -> Result<(), String> {
 }
 
 /// Steps taken by every rank together, seen from rank 0's run loop: advance to a step and
-/// gather the whole state there, and if asked measure it (`EnergyAndVirial`).
+/// gather the whole state there, and what is asked of the state reached.
 pub trait Shared {
-    fn advance_to(&mut self, s: &mut State, until: u64, measure: bool) -> Result<Option<EnergyAndVirial>, String>;
+    fn advance_to(&mut self, s: &mut State, until: u64, asks: Asks) -> Result<Reached, String>;
     /// How the work was shared, for `--explain`.
     fn plan(&self) -> String;
+}
+
+/// What rank 0 asks of every rank at the state an advance reaches.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Asks {
+    /// Its potential energy and virial (`EnergyAndVirial`), for a sample or a trace frame.
+    pub measure: bool,
+    /// Each rank's part of the energy and momentum, enclosed (`Parts`), for a checkpoint.
+    pub enclose: bool,
+}
+
+impl Asks {
+    fn to_bits(self) -> u64 {
+        u64::from(self.measure) | u64::from(self.enclose) << 1
+    }
+
+    fn from_bits(b: u64) -> Asks {
+        Asks { measure: b & 1 != 0, enclose: b & 2 != 0 }
+    }
+}
+
+/// What the ranks answered at the state reached.
+#[derive(Debug, Default)]
+pub struct Reached {
+    pub measured: Option<EnergyAndVirial>,
+    pub parts: Option<Parts>,
 }
 
 /// The whole system's potential energy and virial at a state, each rank's part (its own atoms'
@@ -117,10 +147,15 @@ pub struct Domain<E: Exchange> {
     halo: f64,
     dt: f64,
     pool: Pool,
-    /// The scene's model without its bodies, and its bodies by number: the local graph's are
-    /// the owned atoms' and the ghosts'.
+    /// The scene's model without its bodies, and the whole scene's: the local graph's bodies
+    /// are the owned atoms' and the ghosts'.
     model: Model,
-    bodies: Vec<lagra_checker::model::Body>,
+    whole: Model,
+    /// The local graph's model (for the checker's part), and the numbers of its bonded
+    /// instances among the whole's.
+    local_model: Model,
+    instances: Vec<usize>,
+    threads: usize,
     bonded: Bonded,
     bath: Bath,
     /// The atoms this rank owns, by number, ascending.
@@ -197,7 +232,6 @@ impl<E: Exchange> Domain<E> {
         // the pair terms are every rank's; the bonded ones each rank's own (`Bonded::local`)
         let pairs = scene.model.terms.iter().filter(|t| t.sites.is_empty()).cloned().collect();
         let model = Model { bodies: vec![], terms: pairs, ..scene.model.clone() };
-        let bodies = scene.model.bodies.clone();
         let bonded = Bonded::of(&scene.model, &s.x);
         let bath = match (&scene.thermostat, &scene.model.thermostat) {
             (Some(Thermostat::NoseHoover { .. }), Some(chain)) => Bath::Chain(chain.clone()),
@@ -232,8 +266,11 @@ impl<E: Exchange> Domain<E> {
             halo,
             dt: scene.solver.dt,
             pool,
+            local_model: model.clone(),
             model,
-            bodies,
+            whole: scene.model.clone(),
+            instances: vec![],
+            threads,
             bonded,
             bath,
             owned,
@@ -285,7 +322,7 @@ impl<E: Exchange> Domain<E> {
         self.local.v.resize(n, [0.0; 3]);
         self.local.v.resize(n + ghosts.len(), [0.0; 3]);
         self.f = vec![[0.0; 3]; n + ghosts.len()];
-        self.inverse = self.owned.iter().map(|&i| 1.0 / self.bodies[i].mass).collect();
+        self.inverse = self.owned.iter().map(|&i| 1.0 / self.whole.bodies[i].mass).collect();
         self.since = self.local.x[..n].to_vec();
         // the same bodies in the same places keep their graph, and its neighbour list, which
         // rebuilds itself as the bodies move: on one rank, the one-process run's bits
@@ -295,8 +332,8 @@ impl<E: Exchange> Domain<E> {
         let bonded = self.bonded.local(&self.owned, &place);
         let mut apart = [bonded.as_ref().map_or(1.0, |_| 0.0)];
         self.talk(|ex, _| ex.max(&mut apart));
-        let bonded = match (bonded, apart[0]) {
-            (Ok(b), 0.0) => b,
+        let (instances, bonded): (Vec<usize>, Vec<TermInstance>) = match (bonded, apart[0]) {
+            (Ok(b), 0.0) => b.into_iter().unzip(),
             (Err([i, j]), _) => {
                 return Err(format!(
                     "atoms {i} and {j} of a bonded term lie beyond the domains' halo ({:.4}) at step {}: it \
@@ -312,9 +349,11 @@ impl<E: Exchange> Domain<E> {
             }
         };
         if rebuild {
-            let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.bodies[i].clone()).collect();
+            let bodies = self.owned.iter().chain(&ghosts).map(|&i| self.whole.bodies[i].clone()).collect();
             let terms = self.model.terms.iter().cloned().chain(bonded).collect();
-            self.graph = LagrangianGraph::with_pool(&Model { bodies, terms, ..self.model.clone() }, self.pool.clone());
+            self.local_model = Model { bodies, terms, ..self.model.clone() };
+            self.instances = instances;
+            self.graph = LagrangianGraph::with_pool(&self.local_model, self.pool.clone());
             // pairs between ghosts give no owned atom a force
             self.graph.leave_out_pairs_among(n);
         }
@@ -430,7 +469,7 @@ impl<E: Exchange> Domain<E> {
         }
         let n = self.owned.len();
         let mine: Sum = (self.local.v[..n].iter().zip(&self.owned))
-            .map(|(v, &i)| 0.5 * self.bodies[i].mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+            .map(|(v, &i)| 0.5 * self.whole.bodies[i].mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
             .collect();
         let all = self.talk(|ex, _| ex.all_gather(&mine.parts()));
         let mut kinetic = Sum::default();
@@ -448,22 +487,57 @@ impl<E: Exchange> Domain<E> {
         Ok(())
     }
 
-    /// Every rank's atoms at rank 0, into `whole` (on the other ranks `None`). A collective.
-    fn gather(&mut self, whole: Option<&mut State>) {
+    /// Every rank's atoms at rank 0, into `whole` (on the other ranks `None`), and their numbers
+    /// in the order received (rank by rank; empty on the other ranks). A collective.
+    fn gather(&mut self, whole: Option<&mut State>) -> Vec<usize> {
         let n = self.owned.len();
         let mut out = vec![vec![]; self.ex.size()];
         out[0] = (0..n)
             .flat_map(|k| with_number(self.owned[k], self.local.x[k]).into_iter().chain(self.local.v[k]))
             .collect();
         let got = self.talk(|ex, _| ex.all_to_all(out));
+        let mut numbers = vec![];
         if let Some(s) = whole {
             for a in got.iter().flat_map(|g| g.chunks_exact(7)) {
                 let i = a[0] as usize;
                 (s.x[i], s.v[i]) = ([a[1], a[2], a[3]], [a[4], a[5], a[6]]);
+                numbers.push(i);
             }
             s.chain.clone_from(&self.local.chain);
             set_step(s, self.step, self.dt);
         }
+        numbers
+    }
+
+    /// Every rank's part of the energy and momentum at the state reached, enclosed by the
+    /// checker (`Part::enclose`, which also checks that the part covers its share), on rank 0
+    /// with the `numbers` it gathered (`None` on the other ranks). A collective.
+    fn enclose(&mut self, numbers: Vec<usize>) -> Option<Parts> {
+        let (me, n) = (self.ex.rank(), self.owned.len());
+        let mine = Region::of(&self.local.x[..n], self.bricks.centre(me), &self.model.cell);
+        let all = self.talk(|ex, _| ex.all_gather(&mine.to_bits()));
+        let regions: Vec<Region> = all.chunks_exact(9).map(Region::from_bits).collect();
+        let mut sent = vec![vec![]; self.ex.size()];
+        self.peers.iter().zip(&self.send).for_each(|(&r, s)| sent[r].clone_from(s));
+        let local_numbers: Vec<usize> = self.owned.iter().chain(&self.ghosts).copied().collect();
+        let part = Part::enclose(&Local {
+            whole: &self.whole,
+            model: &self.local_model,
+            state: self.local.snapshot(),
+            owned: n,
+            numbers: &local_numbers,
+            instances: &self.instances,
+            rank: me,
+            regions: &regions,
+            sent: &sent,
+            threads: self.threads,
+        });
+        if let Some(f) = &part.flaw {
+            eprintln!("lagra (rank {me}): at step {}: its part of the energy and momentum is refused: {f}", self.step);
+        }
+        let all = self.talk(|ex, _| ex.all_gather(&part.to_bits()));
+        let parts = all.chunks_exact(PART_BITS).enumerate().map(|(r, b)| Part::from_bits(b, r)).collect();
+        (me == 0).then_some(Parts { parts, numbers })
     }
 
     /// The whole system's potential energy and virial at the state reached (a collective): a
@@ -491,21 +565,25 @@ impl<E: Exchange> Domain<E> {
         }
     }
 
-    /// Follows rank 0's run loop on another rank: advances where it says (measuring where it
-    /// says), until it says stop.
+    /// Follows rank 0's run loop on another rank: advances where it says (answering what it
+    /// asks there), until it says stop.
     pub fn follow(mut self) {
         loop {
-            let (mut until, mut measure) = (0, 0);
+            let (mut until, mut asks) = (0, 0);
             self.ex.broadcast(&mut until);
             if until == STOP {
                 return;
             }
-            self.ex.broadcast(&mut measure);
+            self.ex.broadcast(&mut asks);
+            let asks = Asks::from_bits(asks);
             // a failure is rank 0's to report: every rank knows it and stops at the same step
             let _ = self.steps_to(until);
             self.gather(None);
-            if measure == 1 {
+            if asks.measure {
                 let _ = self.measure();
+            }
+            if asks.enclose {
+                self.enclose(vec![]);
             }
         }
     }
@@ -519,14 +597,15 @@ impl<E: Exchange> Domain<E> {
 }
 
 impl<E: Exchange> Shared for Domain<E> {
-    fn advance_to(&mut self, s: &mut State, until: u64, measure: bool) -> Result<Option<EnergyAndVirial>, String> {
-        let (mut u, mut m) = (until, u64::from(measure));
+    fn advance_to(&mut self, s: &mut State, until: u64, asks: Asks) -> Result<Reached, String> {
+        let (mut u, mut a) = (until, asks.to_bits());
         self.ex.broadcast(&mut u);
-        self.ex.broadcast(&mut m);
+        self.ex.broadcast(&mut a);
         let done = self.steps_to(until);
-        self.gather(Some(s));
-        let measured = measure.then(|| self.measure()).transpose();
-        done.and(measured)
+        let numbers = self.gather(Some(s));
+        let measured = asks.measure.then(|| self.measure()).transpose();
+        let parts = if asks.enclose { self.enclose(numbers) } else { None };
+        done.and(measured).map(|measured| Reached { measured, parts })
     }
 
     fn plan(&self) -> String {

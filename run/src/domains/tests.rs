@@ -1,6 +1,8 @@
 use super::exchange::{Alone, Threads};
 use super::*;
 use crate::run::{run, Options, Report};
+use lagra_checker::certificate::Mark;
+use lagra_checker::monitor::Monitor;
 
 /// 864 Lennard-Jones atoms (`cells` 6; 6,912 at 12), hot enough that atoms cross bricks and the
 /// ghosts are chosen again within the run; energy and momentum claimed every 20 steps. At 6
@@ -93,6 +95,9 @@ fn two_and_four_ranks_follow_the_one_process_run_to_round_off() {
         assert!(dx < 1e-10 && dv < 1e-9, "{ranks} ranks {grid:?}: |Δx| {dx:e}, |Δv| {dv:e}");
         assert!(dx > 0.0, "{ranks} ranks: another summation order, so not the same bits");
         assert!(rep.solver_plan.as_deref().unwrap().starts_with("domains: "), "{:?}", rep.solver_plan);
+        // energy and momentum judged from the ranks' parts at steps 20, 40 and 60
+        let p = &rep.outcome.parts;
+        assert_eq!((p.used, p.refused), (3, 0), "{ranks} ranks: {:?}", p.why);
     }
 }
 
@@ -174,7 +179,7 @@ fn every_step_each_owned_atom_feels_the_force_of_the_whole_system() {
         scope.spawn(move || Domain::new(job.next().unwrap(), scene, &s0, None, 1).unwrap().follow());
         let mut d = Domain::new(root, scene, &s, None, 1).unwrap();
         for step in 1..=100 {
-            d.advance_to(&mut s, step, false).unwrap();
+            d.advance_to(&mut s, step, Asks::default()).unwrap();
             whole.forces(&s, &mut f).unwrap();
             for (k, &i) in d.owned.iter().enumerate() {
                 let off = (0..3).map(|c| (d.f[k][c] - f[i][c]).abs()).fold(0.0, f64::max);
@@ -197,6 +202,9 @@ fn bonds_and_angles_across_bricks_follow_the_one_process_run_to_round_off() {
         assert!(passed(&rep), "{ranks} ranks: {:?}", rep.outcome.verdicts);
         let dx = largest_difference(&rep.state.x, &alone.state.x);
         assert!(dx < 1e-10, "{ranks} ranks: |Δx| {dx:e}");
+        // every bond and angle counted by one rank: the parts stood for the whole
+        let p = &rep.outcome.parts;
+        assert_eq!((p.used, p.refused), (3, 0), "{ranks} ranks: {:?}", p.why);
     }
     // a bond's atoms both owned elsewhere is no rank's twice: the one-rank run is the same bits
     let mut d = Domain::new(Alone, &scene, &lagra_kernel::setup::start(&scene), None, 1).unwrap();
@@ -317,6 +325,9 @@ fn a_thermostat_on_several_ranks_follows_the_one_process_run_to_round_off() {
             assert!(regroups > 1, "{bath}, {ranks} ranks");
             if chained {
                 assert!(passed(&rep), "{bath}, {ranks} ranks: {:?}", rep.outcome.verdicts);
+                // H′ from the parts, the chain's share added on rank 0
+                let p = &rep.outcome.parts;
+                assert_eq!((p.used, p.refused), (3, 0), "{bath}, {ranks} ranks: {:?}", p.why);
                 let dl = rep
                     .state
                     .chain
@@ -341,4 +352,68 @@ fn a_thermostat_on_several_ranks_follows_the_one_process_run_to_round_off() {
             }
         }
     }
+}
+
+/// The marks a run on three ranks took from the ranks' parts meet the enclosures evaluated
+/// whole from the same states (what `lagra check --states` re-derives), and would not if a part
+/// were off by its own width; where the parts show a breach, the whole state decides it, so a
+/// failure is re-derived to the bit.
+#[test]
+fn the_parts_enclosures_meet_the_whole_states_and_a_breach_is_judged_whole() {
+    use lagra_checker::decision::{Verdict, BINARY64, PARTS};
+    let scene = liquid_of(12, 60);
+    let s0 = lagra_kernel::setup::start(&scene);
+    let mut states: Vec<State> = vec![];
+    let rep = std::thread::scope(|scope| {
+        let mut job = Threads::job(3).into_iter();
+        let root = job.next().unwrap();
+        for ex in job {
+            let (scene, s0) = (&scene, &s0);
+            scope.spawn(move || Domain::new(ex, scene, s0, None, 1).unwrap().follow());
+        }
+        let mut d = Domain::new(root, &scene, &s0, None, 1).unwrap();
+        let mut keep = |s: &lagra_checker::model::Snapshot| {
+            states.push(State {
+                step: s.step,
+                t: s.t,
+                x: s.x.to_vec(),
+                v: s.v.to_vec(),
+                chain: s.chain.to_vec(),
+                spin: vec![],
+            });
+            Ok::<(), std::io::Error>(())
+        };
+        run(&scene, Options { shared: Some(&mut d), record: Some(&mut keep), ..Options::plain(None) }).unwrap()
+    });
+    assert!(passed(&rep), "{:?}", rep.outcome.verdicts);
+    let mut whole = Monitor::new(scene.model.clone(), scene.claims.clone(), 60).unwrap();
+    states.iter().for_each(|s| whole.observe(&s.snapshot()).unwrap());
+    let derived = whole.finish().trails;
+    let mut from_parts = 0;
+    for (t, d) in rep.outcome.trails.iter().zip(&derived) {
+        assert_eq!(t.marks.len(), d.marks.len());
+        for (a, b) in t.marks.iter().zip(&d.marks) {
+            assert!(a.same(b) || a.meets(b), "{:?} at step {}: {a:?} against {b:?}", t.claim, a.step);
+            if a.precision == PARTS {
+                from_parts += 1;
+                let w = (a.hi - a.lo).max(1e-300);
+                let beyond = Mark { lo: b.hi + w, hi: b.hi + 2.0 * w, ..*a };
+                assert!(!beyond.meets(b), "a part off by its width would be seen");
+            }
+        }
+    }
+    assert_eq!(from_parts, 6, "energy and momentum at steps 20, 40 and 60");
+
+    // a tolerance the liquid cannot keep: the parts show the breach, the whole state decides it
+    let mut strict = scene.clone();
+    strict.claims[0].tol = Some(1e-9);
+    let alone = run(&strict, Options::plain(None)).unwrap();
+    let (rep, _) = in_domains(&strict, 3, None, 1);
+    let breach = |r: &Report| match &r.outcome.verdicts[0] {
+        Verdict::Fail(b) => (b.step, b.precision),
+        v => panic!("{v:?}"),
+    };
+    assert_eq!(breach(&alone), (20, BINARY64));
+    assert_eq!(breach(&rep), (20, BINARY64), "found in the parts, decided on the whole state");
+    assert_eq!(rep.outcome.parts.used, 1);
 }
