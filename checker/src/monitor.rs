@@ -314,7 +314,7 @@ impl Monitor {
         }
         let model = &self.model;
         let first_state = self.reference.is_none();
-        let whole = match parts.filter(|_| !first_state).map(|p| p.whole(model)) {
+        let whole = match parts.map(|p| p.whole(model)) {
             Some(Ok(w)) => Some(w),
             Some(Err(why)) => {
                 self.parts.refused += 1;
@@ -324,8 +324,9 @@ impl Monitor {
             None => None,
         };
         let given = |t: &Track| whole.as_ref().and_then(|w| from_parts(&t.claim, w, model, s));
-        let evaluated =
-            first_state || self.ledger.is_some() || self.tracks.iter().any(|t| due(t) && given(t).is_none());
+        // the first state's measures are every claim's reference
+        let wanted = |t: &Track| first_state || due(t);
+        let evaluated = self.balance || self.tracks.iter().any(|t| wanted(t) && given(t).is_none());
         let q = evaluated.then(|| {
             Lifted::reusing(std::mem::take(&mut self.sites), model, s, &Outward::NAN)
                 .on_threads(self.threads)
@@ -340,7 +341,8 @@ impl Monitor {
                 self.ledger =
                     Some(Ledger { t: s.t, power: lifted().dissipated_power(model), dissipated: Outward::point(0.0) });
             }
-            let measures = self.tracks.iter().map(|t| measure(&t.claim, lifted(), model, s)).collect();
+            let measures =
+                self.tracks.iter().map(|t| given(t).unwrap_or_else(|| measure(&t.claim, lifted(), model, s))).collect();
             self.reference = Some(Reference { state: State::from(s), measures });
         } else if let Some(l) = &mut self.ledger {
             let power = lifted().dissipated_power(model);

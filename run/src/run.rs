@@ -310,11 +310,14 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                 };
                 let sampled_at_start = carried.is_none() && observer.as_ref().is_some_and(|o| o.due(state.step));
                 let here = state.step;
-                let at_start = match shared.as_mut() {
-                    Some(d) if tracing || sampled_at_start => {
-                        d.advance_to(&mut state, here, Asks { measure: true, enclose: false })?.measured
+                // (the first state's parts are the reference of energy and momentum)
+                let asks = Asks { measure: tracing || sampled_at_start, enclose: in_parts && carried.is_none() };
+                let (at_start, start_parts) = match shared.as_mut() {
+                    Some(d) if asks != Asks::default() => {
+                        let r = d.advance_to(&mut state, here, asks)?;
+                        (r.measured, r.parts)
                     }
-                    _ => None,
+                    _ => (None, None),
                 };
                 match &carried {
                     Some(c) => {
@@ -325,7 +328,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
                         check(&mut checking, &mut state, false, None)?;
                     }
                     None => {
-                        stop = check(&mut checking, &mut state, true, None)?;
+                        stop = check(&mut checking, &mut state, true, start_parts)?;
                         meters.iter_mut().for_each(|(m, _)| m.observe(state.t, &state.x, &state.v, solver.forces()));
                         sample(&mut observer, &state, potential(at_start, &solver), at_start)?;
                     }
