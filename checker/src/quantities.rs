@@ -159,7 +159,7 @@ impl<R: PairSum> Lifted<R> {
     /// ½ Σ m |v|², and each rigid body's ½ Σ π_k² / I_k.
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
-        let moving = self.sites.iter().fold(self.zero.clone(), |acc, s| acc + half.clone() * s.m.clone() * norm2(&s.v));
+        let moving = R::sum_of(self.zero.clone(), self.sites.iter().map(|s| half.clone() * s.m.clone() * norm2(&s.v)));
         self.spins.iter().fold(moving, |acc, s| {
             (0..3).fold(acc, |acc, k| acc + half.clone() * s.pi[k].clone().powi(2) / s.moments[k].clone())
         })
@@ -219,7 +219,7 @@ impl<R: PairSum> Lifted<R> {
     /// charge of translations.
     pub fn momentum(&self, model: &Model) -> Vec3<R> {
         let free = std::array::from_fn(|c| {
-            self.sites.iter().fold(self.zero.clone(), |acc, s| acc + s.m.clone() * s.v[c].clone())
+            R::sum_of(self.zero.clone(), self.sites.iter().map(|s| s.m.clone() * s.v[c].clone()))
         });
         self.with_shares(model, free, 0)
     }
@@ -228,9 +228,11 @@ impl<R: PairSum> Lifted<R> {
     pub fn angular_momentum(&self, model: &Model) -> Vec3<R> {
         let free = std::array::from_fn(|c| {
             let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-            self.sites.iter().fold(self.zero.clone(), |acc, s| {
-                acc + s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
-            })
+            let each = self
+                .sites
+                .iter()
+                .map(|s| s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone()));
+            R::sum_of(self.zero.clone(), each)
         });
         let spun = self.spins.iter().fold(free, |acc, s| {
             let l = s.world();

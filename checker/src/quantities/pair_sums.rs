@@ -52,6 +52,11 @@ impl<R: PairSum> Lifted<R> {
 /// double loop's order, or, for `Outward`, four pairs at a time in `Lanes` (each pair gets the
 /// same bits as alone) and added exactly in any order (`ExactSum`).
 pub trait PairSum: Real + Send + Sync {
+    /// `start` + Σ `each`: one after another, or for `Outward` exactly (`sum_exactly`).
+    fn sum_of(start: Self, each: impl Iterator<Item = Self>) -> Self {
+        each.fold(start, Self::add)
+    }
+
     /// `acc` + the potential of instance `n` (of `kind`) at each pair `near` holds.
     fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
         let p = &l.params[n];
@@ -68,6 +73,10 @@ impl PairSum for rug::Float {}
 impl PairSum for Mpfi {}
 
 impl PairSum for Outward {
+    fn sum_of(start: Self, each: impl Iterator<Item = Self>) -> Self {
+        start + sum_exactly(each)
+    }
+
     /// Σ lo and Σ hi over the pairs, each exact (`ExactSum`) and rounded once outward: they
     /// bound the exact sum of the pairs' exact potentials, and their bits do not depend on the
     /// order the pairs come in, so the broad phase lists them in whatever order is fastest
@@ -104,6 +113,20 @@ impl PairSum for Outward {
         });
         acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
     }
+}
+
+/// Σ of enclosures as Σ lo and Σ hi, each exact (`ExactSum`) and rounded once outward: its
+/// width is that of the terms alone, where adding one after another widens the sum by an ulp of
+/// each partial sum (at 256,000 atoms more than the momentum's round-off budget), and its bits
+/// do not depend on the order of the terms.
+pub fn sum_exactly(each: impl Iterator<Item = Outward>) -> Outward {
+    let (mut lo, mut hi) = (ExactSum::default(), ExactSum::default());
+    for e in each {
+        let (a, b) = e.bounds();
+        lo.add(a);
+        hi.add(b);
+    }
+    Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
 }
 
 /// The reach a pair term's broad phase is asked for: the term's, with a relative margin of

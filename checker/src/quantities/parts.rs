@@ -24,7 +24,7 @@
 //! bits, as the gather's are), and that a rank's part is of the bodies it sent to the gather.
 //! A part that fails a check is refused, and rank 0 evaluates the whole state instead.
 
-use super::pair_sums::{asked_reach, in_order};
+use super::pair_sums::{asked_reach, in_order, sum_exactly};
 use super::Lifted;
 use crate::broad_phase::Neighbourhood;
 use crate::enclosure::Enclosure;
@@ -168,8 +168,8 @@ impl Part {
         let q = Lifted::new(l.model, &l.state, &Outward::NAN).on_threads(l.threads);
         let owned = &q.sites[..l.owned];
         let half = Outward::point(0.5);
-        let kinetic = exactly(owned.iter().map(|s| half * s.m * crate::real::norm2(&s.v)));
-        let momentum = std::array::from_fn(|c| exactly(owned.iter().map(|s| s.m * s.v[c])));
+        let kinetic = sum_exactly(owned.iter().map(|s| half * s.m * crate::real::norm2(&s.v)));
+        let momentum = std::array::from_fn(|c| sum_exactly(owned.iter().map(|s| s.m * s.v[c])));
         let mut potential = Outward::point(0.0);
         let mut instances = 0;
         for (n, t) in l.model.terms.iter().enumerate() {
@@ -249,19 +249,6 @@ impl Parts {
         let momentum = std::array::from_fn(|c| self.parts.iter().fold(zero, |acc, p| acc + p.momentum[c]));
         Ok(Whole { energy, momentum })
     }
-}
-
-/// Σ of enclosures as Σ lo and Σ hi, each exact (`ExactSum`) and rounded once outward: its
-/// width is that of the terms alone, where adding one after another widens the sum by an ulp
-/// of each partial sum (at 256,000 atoms the momentum's round-off budget is narrower than that).
-fn exactly(each: impl Iterator<Item = Outward>) -> Outward {
-    let (mut lo, mut hi) = (ExactSum::default(), ExactSum::default());
-    for e in each {
-        let (a, b) = e.bounds();
-        lo.add(a);
-        hi.add(b);
-    }
-    Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
 }
 
 /// Whether the rank's model is the whole's restricted to its bodies (see the module's note).
