@@ -141,6 +141,7 @@ fn a_liquid_cut_into_domains_on_two_and_four_ranks_is_certified_and_rechecked_fr
         // energy and momentum judged from the ranks' parts, none refused
         let parts = report["checker_parts"].as_str().unwrap_or_default();
         assert!(parts.contains("added outward at 4 checkpoint(s)") && !parts.contains("refused"), "{parts}");
+        assert!(plan.contains("s enclosing its part of the energy and momentum"), "{plan}");
         let cert_text = std::fs::read_to_string(&cert).unwrap();
         assert!(cert_text.contains(",52]"), "marks from the parts, of precision PARTS");
         // every frame, its energy witness worked out on rank 0 from the gathered state

@@ -217,9 +217,11 @@ struct Tally {
     ghosts: u64,
     owned: u64,
     talking: f64,
-    /// Seconds in migrating and choosing ghosts (exchanges included), and in the forces.
+    /// Seconds in migrating and choosing ghosts (exchanges included), in the forces, and in
+    /// enclosing this rank's parts of the energy and momentum (their gathers included).
     regrouping: f64,
     forcing: f64,
+    enclosing: f64,
     started: Option<Instant>,
 }
 
@@ -513,6 +515,7 @@ impl<E: Exchange> Domain<E> {
     /// checker (`Part::enclose`, which also checks that the part covers its share), on rank 0
     /// with the `numbers` it gathered (`None` on the other ranks). A collective.
     fn enclose(&mut self, numbers: Vec<usize>) -> Option<Parts> {
+        let started = Instant::now();
         let (me, n) = (self.ex.rank(), self.owned.len());
         let mine = Region::of(&self.local.x[..n], self.bricks.centre(me), &self.model.cell);
         let all = self.talk(|ex, _| ex.all_gather(&mine.to_bits()));
@@ -537,6 +540,7 @@ impl<E: Exchange> Domain<E> {
         }
         let all = self.talk(|ex, _| ex.all_gather(&part.to_bits()));
         let parts = all.chunks_exact(PART_BITS).enumerate().map(|(r, b)| Part::from_bits(b, r)).collect();
+        self.tally.enclosing += started.elapsed().as_secs_f64();
         (me == 0).then_some(Parts { parts, numbers })
     }
 
@@ -615,8 +619,8 @@ impl<E: Exchange> Shared for Domain<E> {
         format!(
             "domains: {px}×{py}×{pz} bricks on {} ranks, halo {:.3} (reach {} + skin {:.3}){}; ghosts chosen {} time(s), \
              {:.0}% as many ghosts as owned atoms on rank 0; rank 0 spent {:.3} s of {:.3} s in exchanges (its waits \
-             for the other ranks included), {:.3} s moving atoms and choosing ghosts, {:.3} s in forces; rank 0's \
-             forces since its ghosts were last chosen: {}",
+             for the other ranks included), {:.3} s moving atoms and choosing ghosts, {:.3} s in forces, {:.3} s \
+             enclosing its part of the energy and momentum; rank 0's forces since its ghosts were last chosen: {}",
             self.ex.size(),
             self.halo,
             self.reach,
@@ -628,6 +632,7 @@ impl<E: Exchange> Shared for Domain<E> {
             total,
             t.regrouping,
             t.forcing,
+            t.enclosing,
             self.graph.plan().into_iter().map(|(_, p)| p).collect::<Vec<_>>().join("; ")
         )
     }
