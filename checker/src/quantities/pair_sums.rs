@@ -82,36 +82,58 @@ impl PairSum for Outward {
     /// order the pairs come in, so the broad phase lists them in whatever order is fastest
     /// (`each_unordered`) and in parts on `threads` threads.
     fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
-        let wide: Vec<Lanes> = l.params[n].iter().map(|c| Lanes::of([*c; WIDTH])).collect();
+        let [(lo, hi)] = l.exact_lane_sums(kind, n, near, |_| Some(0));
+        acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
+    }
+}
+
+impl Lifted<Outward> {
+    /// Σ lo and Σ hi, each exact, of the potential of instance `n` (of `kind`) at the pairs
+    /// `near` holds, four pairs at a time in `Lanes`, in `C` classes: `class` puts a pair in one
+    /// or leaves it out. Listed in parts on the threads in whatever order is fastest: exact sums
+    /// do not depend on it.
+    pub(super) fn exact_lane_sums<const C: usize>(
+        &self,
+        kind: Kind,
+        n: usize,
+        near: &Neighbourhood,
+        class: impl Fn(&Near) -> Option<usize> + Sync,
+    ) -> [(ExactSum, ExactSum); C] {
+        let wide: Vec<Lanes> = self.params[n].iter().map(|c| Lanes::of([*c; WIDTH])).collect();
         let parts = near.parts();
-        let pieces = (4 * l.threads).min(parts.max(1));
-        let sums = in_order(pieces, l.threads, |k| {
-            let (mut lo, mut hi, reads) = (ExactSum::default(), ExactSum::default(), kind.reads());
+        let pieces = (4 * self.threads).min(parts.max(1));
+        let sums = in_order(pieces, self.threads, |k| {
+            let mut sums: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());
+            let (mut kept, reads) = (vec![], kind.reads());
             let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
             near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
-                for group in pairs.chunks(WIDTH) {
-                    for (lane, q) in group.iter().enumerate() {
-                        let (a, b) = (&l.sites[q.i], &l.sites[q.j]);
+                kept.clear();
+                kept.extend(pairs.iter().filter_map(|q| class(q).map(|c| (*q, c))));
+                for group in kept.chunks(WIDTH) {
+                    for (lane, (q, _)) in group.iter().enumerate() {
+                        let (a, b) = (&self.sites[q.i], &self.sites[q.j]);
                         sites[0].put(lane, &a.x, a, reads);
-                        sites[1].put(lane, &l.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
+                        sites[1].put(lane, &self.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
                     }
                     // the lanes of a short last group keep the sites of the group before (or
-                    // NaN), and are dropped
-                    for e in &kind.potential(&wide, &[&sites[0], &sites[1]]).lanes()[..group.len()] {
+                    // NaN), and are dropped by the zip
+                    for (e, (_, c)) in kind.potential(&wide, &[&sites[0], &sites[1]]).lanes().iter().zip(group) {
                         let (a, b) = e.bounds();
-                        lo.add(a);
-                        hi.add(b);
+                        sums[*c].0.add(a);
+                        sums[*c].1.add(b);
                     }
                 }
             });
-            (lo, hi)
+            sums
         });
-        let (lo, hi) = sums.into_iter().fold((ExactSum::default(), ExactSum::default()), |(mut lo, mut hi), (a, b)| {
-            lo.merge(&a);
-            hi.merge(&b);
-            (lo, hi)
-        });
-        acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
+        let mut total: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());
+        for s in &sums {
+            for (t, (lo, hi)) in total.iter_mut().zip(s) {
+                t.0.merge(lo);
+                t.1.merge(hi);
+            }
+        }
+        total
     }
 }
 

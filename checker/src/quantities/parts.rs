@@ -24,13 +24,12 @@
 //! bits, as the gather's are), and that a rank's part is of the bodies it sent to the gather.
 //! A part that fails a check is refused, and rank 0 evaluates the whole state instead.
 
-use super::pair_sums::{asked_reach, in_order, sum_exactly};
+use super::pair_sums::{asked_reach, sum_exactly};
 use super::Lifted;
 use crate::broad_phase::Neighbourhood;
 use crate::enclosure::Enclosure;
 use crate::exact_sum::ExactSum;
 use crate::model::{Cell, Model, Snapshot, TermInstance};
-use crate::outward::lanes::{Lanes, WIDTH};
 use crate::outward::Outward;
 use crate::terms::{Kind, Shape, Site};
 use rug::float::Round;
@@ -329,45 +328,11 @@ impl Lifted<Outward> {
     /// (`i < owned`) whole, of one owned body half, of none not at all: as
     /// `PairSum::add_potentials` sums, four pairs at a time and exactly, in two sums.
     fn pairs_part(&self, kind: Kind, n: usize, near: &Neighbourhood, owned: usize) -> Outward {
-        let wide: Vec<Lanes> = self.params[n].iter().map(|c| Lanes::of([*c; WIDTH])).collect();
-        let parts = near.parts();
-        let pieces = (4 * self.threads).min(parts.max(1));
-        // [halves, wholes] × [lo, hi]
-        type Sums = [[ExactSum; 2]; 2];
-        let sums: Vec<Sums> = in_order(pieces, self.threads, |k| {
-            let mut sums: Sums = Default::default();
-            let (mut kept, reads) = (vec![], kind.reads());
-            let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
-            near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
-                kept.clear();
-                kept.extend(pairs.iter().filter_map(|q| match usize::from(q.i < owned) + usize::from(q.j < owned) {
-                    0 => None,
-                    w => Some((*q, w - 1)),
-                }));
-                for group in kept.chunks(WIDTH) {
-                    for (lane, (q, _)) in group.iter().enumerate() {
-                        let (a, b) = (&self.sites[q.i], &self.sites[q.j]);
-                        sites[0].put(lane, &a.x, a, reads);
-                        sites[1].put(lane, &self.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
-                    }
-                    let e = kind.potential(&wide, &[&sites[0], &sites[1]]).lanes();
-                    for (e, (_, w)) in e.iter().zip(group) {
-                        let (lo, hi) = e.bounds();
-                        sums[*w][0].add(lo);
-                        sums[*w][1].add(hi);
-                    }
-                }
-            });
-            sums
-        });
-        let mut total: Sums = Default::default();
-        for s in &sums {
-            for w in 0..2 {
-                (0..2).for_each(|b| total[w][b].merge(&s[w][b]));
-            }
-        }
-        let sum = |s: &[ExactSum; 2]| Outward::from_bounds(s[0].total(Round::Down), s[1].total(Round::Up));
-        sum(&total[1]) + sum(&total[0]) * Outward::point(0.5)
+        // [halves, wholes]: a pair counts by how many of its bodies are owned, none not at all
+        let [halves, wholes] = self
+            .exact_lane_sums(kind, n, near, |q| (usize::from(q.i < owned) + usize::from(q.j < owned)).checked_sub(1));
+        let sum = |(lo, hi): (ExactSum, ExactSum)| Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up));
+        sum(wholes) + sum(halves) * Outward::point(0.5)
     }
 }
 
