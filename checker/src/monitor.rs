@@ -163,7 +163,7 @@ fn measure<E: Enclosure + PairSum>(c: &Claim, q: &Lifted<E>, model: &Model, s: &
             })
             .collect(),
         ClaimKind::Resting => vec![q.fastest_point(model)],
-        ClaimKind::NoPenetration => vec![q.penetration(model, s.x)],
+        ClaimKind::NoPenetration => vec![q.penetration(model, s)],
         ClaimKind::JointSatisfied => q.pin_gaps(model),
         ClaimKind::DimensionalConsistency => vec![],
     }

@@ -261,6 +261,12 @@ pub(crate) struct Spin<R> {
     pub(crate) moments: Vec3<R>,
 }
 
+/// The axes (the rotation's columns) of a spin's orientation q/|q|, turned in binary64 as
+/// `Spin::axes` turns them in `R`: for a broad phase that only culls.
+pub(crate) fn rough_axes(spin: &[f64; 7]) -> [Vec3<f64>; 3] {
+    Spin { q: [spin[0], spin[1], spin[2], spin[3]], pi: [0.0; 3], moments: [1.0; 3] }.axes()
+}
+
 impl<R: Real> Spin<R> {
     /// The angular momentum about the centre of mass in the world frame: π turned by q/|q|,
     /// ((w² − u·u) π + 2(u·π) u + 2w (u × π)) / |q|² with q = (w, u) — the rotation a unit
