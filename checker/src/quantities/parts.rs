@@ -104,6 +104,37 @@ impl Region {
         }
         gap2 <= reach * reach * (1.0 + MARGIN)
     }
+
+    /// Whether some point of this region may lie within `reach` of some point of `other`
+    /// (true when in doubt): along each axis the gap between the two intervals, `other`'s seen
+    /// from this centre at each of its images, less the margins of both regions and of the
+    /// centres' offset. Where two regions do not meet, no body of one is near the other, so a
+    /// rank tests its bodies one by one only against the regions its own meets (its
+    /// neighbours'), not against every rank's.
+    fn meets(&self, other: &Region, reach: f64, cell: &Option<Cell>) -> bool {
+        let l = lengths(cell);
+        let mut gap2 = 0.0;
+        for a in 0..3 {
+            if self.lo[a] > self.hi[a] || other.lo[a] > other.hi[a] {
+                return false;
+            }
+            let (d, m) = offset(other.centre[a], self.centre[a], l[a]);
+            // each interval is within about half a box of its centre, so the images two boxes
+            // either way bring every near copy of `other` into view
+            let images: &[f64] = if l[a] > 0.0 { &[-2.0, -1.0, 0.0, 1.0, 2.0] } else { &[0.0] };
+            let gap = images
+                .iter()
+                .map(|k| {
+                    let (lo, hi) = (d + other.lo[a] + k * l[a], d + other.hi[a] + k * l[a]);
+                    (lo - self.hi[a]).max(self.lo[a] - hi).max(0.0)
+                })
+                .fold(f64::INFINITY, f64::min);
+            let sizes = [self.lo[a], self.hi[a], other.lo[a], other.hi[a]].map(f64::abs).iter().sum::<f64>();
+            let gap = (gap - 2.0 * m - MARGIN * (sizes + 2.0 * l[a])).max(0.0);
+            gap2 += gap * gap;
+        }
+        gap2 <= reach * reach * (1.0 + MARGIN)
+    }
 }
 
 /// The box's periodic lengths (0 along an open axis).
@@ -313,7 +344,8 @@ fn covers(l: &Local) -> Result<(), String> {
         return Err("the rank's region is not that of its bodies".into());
     }
     let reach = l.model.terms.iter().filter(|t| t.sites.is_empty()).filter_map(asked_reach).fold(0.0, f64::max);
-    for (r, region) in l.regions.iter().enumerate().filter(|(r, _)| *r != l.rank) {
+    let near = l.regions.iter().enumerate().filter(|(r, region)| *r != l.rank && mine.meets(region, reach, cell));
+    for (r, region) in near {
         let mut sent = l.sent[r].clone();
         sent.sort_unstable();
         if let Some(k) = (0..l.owned).find(|&k| region.near(owned[k], reach, cell) && sent.binary_search(&k).is_err()) {

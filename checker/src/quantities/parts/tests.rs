@@ -227,3 +227,66 @@ proptest! {
         prop_assert!(r.near(p, reach, &cell), "{p:?} from {b:?}");
     }
 }
+
+proptest! {
+    /// Two regions with a body of one within reach of a body of the other (to its nearest
+    /// image) meet, wherever the bodies lie and whatever the centres: a rank that skips the
+    /// regions its own does not meet skips no body it must send.
+    #[test]
+    fn regions_with_bodies_within_reach_meet(
+        mine in proptest::collection::vec(proptest::array::uniform3(-30.0f64..40.0), 1..6),
+        theirs in proptest::collection::vec(proptest::array::uniform3(-30.0f64..40.0), 1..6),
+        centres in proptest::array::uniform6(-15.0f64..25.0),
+        open in proptest::array::uniform3(proptest::bool::ANY),
+    ) {
+        let cell = Some(Cell { size: [10.0, 7.0, 13.0], periodic: open.map(|o| !o) });
+        let reach = 2.5;
+        let (a, b) = (
+            Region::of(&mine, [centres[0], centres[1], centres[2]], &cell),
+            Region::of(&theirs, [centres[3], centres[4], centres[5]], &cell),
+        );
+        let l = lengths(&cell);
+        let apart = |p: &[f64; 3], q: &[f64; 3]| {
+            (0..3).map(|k| offset(p[k], q[k], l[k]).0.powi(2)).sum::<f64>().sqrt()
+        };
+        let within = mine.iter().any(|p| theirs.iter().any(|q| apart(p, q) <= reach));
+        prop_assert!(!within || (a.meets(&b, reach, &cell) && b.meets(&a, reach, &cell)));
+    }
+}
+
+/// Boxes a gap of 2 apart meet within a reach of 2.5, a gap of 4 do not, and across a periodic
+/// face the gap is the wrapped one; an empty region meets nothing.
+#[test]
+fn regions_meet_across_their_gap_and_the_periodic_faces() {
+    let cell = Some(Cell { size: [20.0; 3], periodic: [true; 3] });
+    // unit cubes along x
+    let cube = |at: f64| Region::of(&[[at, 0.0, 0.0], [at + 1.0, 1.0, 1.0]], [at + 0.5, 0.5, 0.5], &cell);
+    let (a, near, far, wrapped) = (cube(0.0), cube(3.0), cube(5.0), cube(18.0));
+    assert!(a.meets(&near, 2.5, &cell) && near.meets(&a, 2.5, &cell));
+    assert!(!a.meets(&far, 2.5, &cell) && !far.meets(&a, 2.5, &cell));
+    assert!(a.meets(&wrapped, 2.5, &cell));
+    let open = Some(Cell { size: [20.0; 3], periodic: [false; 3] });
+    let (a, wrapped) =
+        (Region::of(&[[0.0; 3]], [0.0; 3], &open), Region::of(&[[18.0, 0.0, 0.0]], [18.0, 0.0, 0.0], &open));
+    assert!(!a.meets(&wrapped, 2.5, &open));
+    assert!(!Region::of(&[], [0.0; 3], &cell).meets(&a, 2.5, &cell));
+}
+
+/// Bricks of a 4×4×4 grid in a periodic box, each region holding its brick's corners: a brick
+/// meets its 26 neighbours (across the periodic faces too) and no other, so a rank tests its
+/// bodies one by one against 26 regions, not 63.
+#[test]
+fn a_brick_meets_its_26_neighbours_and_no_other() {
+    let cell = Some(Cell { size: [40.0; 3], periodic: [true; 3] });
+    let brick = |k: [usize; 3]| {
+        let lo = k.map(|c| c as f64 * 10.0);
+        let corners: Vec<[f64; 3]> =
+            (0..8).map(|c| std::array::from_fn(|a| lo[a] + if c >> a & 1 == 1 { 9.99 } else { 0.0 })).collect();
+        Region::of(&corners, lo.map(|c| c + 5.0), &cell)
+    };
+    let all: Vec<Region> = (0..64).map(|i| brick([i % 4, i / 4 % 4, i / 16])).collect();
+    for (i, r) in all.iter().enumerate() {
+        let met = all.iter().enumerate().filter(|(j, o)| *j != i && r.meets(o, 2.5, &cell)).count();
+        assert_eq!(met, 26, "brick {i}");
+    }
+}
