@@ -104,26 +104,36 @@ impl Lifted<Outward> {
         let pieces = (4 * self.threads).min(parts.max(1));
         let sums = in_order(pieces, self.threads, |k| {
             let mut sums: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());
-            let (mut kept, reads) = (vec![], kind.reads());
+            let reads = kind.reads();
             let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
+            // the pairs kept, put into the lanes as they come, evaluated four at a time; the
+            // lanes past a short last group hold the group before's sites (or NaN) and are
+            // dropped by the zip
+            let (mut classes, mut held) = ([0; WIDTH], 0);
+            let mut evaluate = |classes: &[usize], sites: &[Site<Lanes>; 2]| {
+                for (e, c) in kind.potential(&wide, &[&sites[0], &sites[1]]).lanes().iter().zip(classes) {
+                    let (a, b) = e.bounds();
+                    sums[*c].0.add(a);
+                    sums[*c].1.add(b);
+                }
+            };
             near.each_unordered(parts * k / pieces..parts * (k + 1) / pieces, |pairs| {
-                kept.clear();
-                kept.extend(pairs.iter().filter_map(|q| class(q).map(|c| (*q, c))));
-                for group in kept.chunks(WIDTH) {
-                    for (lane, (q, _)) in group.iter().enumerate() {
-                        let (a, b) = (&self.sites[q.i], &self.sites[q.j]);
-                        sites[0].put(lane, &a.x, a, reads);
-                        sites[1].put(lane, &self.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
-                    }
-                    // the lanes of a short last group keep the sites of the group before (or
-                    // NaN), and are dropped by the zip
-                    for (e, (_, c)) in kind.potential(&wide, &[&sites[0], &sites[1]]).lanes().iter().zip(group) {
-                        let (a, b) = e.bounds();
-                        sums[*c].0.add(a);
-                        sums[*c].1.add(b);
+                for q in pairs {
+                    let Some(c) = class(q) else { continue };
+                    let (a, b) = (&self.sites[q.i], &self.sites[q.j]);
+                    sites[0].put(held, &a.x, a, reads);
+                    sites[1].put(held, &self.image_of(q.i, q.j).unwrap_or(b.x), b, reads);
+                    classes[held] = c;
+                    held += 1;
+                    if held == WIDTH {
+                        evaluate(&classes, &sites);
+                        held = 0;
                     }
                 }
             });
+            if held > 0 {
+                evaluate(&classes[..held], &sites);
+            }
             sums
         });
         let mut total: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());

@@ -1,6 +1,6 @@
 use super::*;
-use crate::setup::{compile, start};
 use crate::contact::Touch;
+use crate::setup::{compile, start};
 use crate::solvers::Stepper;
 use nalgebra::Matrix6;
 use proptest::prelude::*;
