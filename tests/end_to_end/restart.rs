@@ -71,10 +71,11 @@ fn contact_resumes_to_the_bit() {
     cut_in_three("scenes/hinged_chain.lagra", 600, [201, 402]);
     cut_in_three("scenes/block_stack.lagra", 300, [101, 202]);
     let dir = tempfile::tempdir().unwrap();
-    let avbd = dir.path().join("block_stack_avbd.lagra");
+    // the pyramid's default is AVBD (its claims are rest and depth): sequential impulses named
+    let impulses = dir.path().join("block_stack_impulses.lagra");
     let text = std::fs::read_to_string("scenes/block_stack.lagra").unwrap();
-    std::fs::write(&avbd, text.replace("solver { dt", "solver { integrator: \"avbd\", dt")).unwrap();
-    cut_in_three(avbd.to_str().unwrap(), 300, [101, 202]);
+    std::fs::write(&impulses, text.replace("solver { dt", "solver { integrator: \"sequential_impulses\", dt")).unwrap();
+    cut_in_three(impulses.to_str().unwrap(), 300, [101, 202]);
 }
 
 #[test]

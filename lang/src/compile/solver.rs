@@ -8,6 +8,7 @@ use crate::integrator::{Integrator, Settings};
 use crate::scene::Solver;
 use crate::thermostat::Thermostat;
 use crate::Pair;
+use lagra_checker::claims::ClaimKind;
 use lagra_checker::model::{Cell, Constraint};
 use lagra_checker::units::Dim;
 
@@ -150,7 +151,20 @@ impl<'a> Compiler<'a> {
         let constrained = !self.constraints.is_empty();
         let touching = self.floor.is_some() || self.bodies.iter().filter(|b| b.solid.is_some()).count() >= 2;
         let jointed = self.joints.first().map(|j| j.span);
-        let default = if jointed.is_some() { Integrator::Avbd } else { Integrator::default_for(constrained, touching) };
+        let conserves = self.noether.is_some()
+            || self.claims.iter().any(|c| {
+                matches!(
+                    c.kind,
+                    ClaimKind::EnergyConservation
+                        | ClaimKind::MomentumConservation
+                        | ClaimKind::AngularMomentumConservation
+                )
+            });
+        let default = if jointed.is_some() {
+            Integrator::Avbd
+        } else {
+            Integrator::default_for(constrained, touching, conserves)
+        };
         let (integrator, at) = b.integrator.unwrap_or((default, b.at));
         if let (Some(joint), true) = (jointed, integrator != Integrator::Avbd) {
             return err(

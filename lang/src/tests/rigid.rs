@@ -126,3 +126,35 @@ fn bad_joints_are_refused_where_they_are_written() {
     let d = compile(&unjointed).unwrap_err();
     assert_eq!((d.line_col(&unjointed), d.message.as_str()), ((5, 11), "joint_satisfied: the model has no joint"));
 }
+
+/// Where solids touch and the scene names no solver, it gets AVBD, unless it claims what AVBD
+/// does not keep (energy, momentum, angular momentum, or Noether's claims): then sequential
+/// impulses. A scene that names one gets it.
+#[test]
+fn a_contact_scene_gets_avbd_unless_it_claims_energy_or_momentum() {
+    use crate::integrator::Integrator;
+    let scene = |claim: &str, solver: &str| {
+        format!(
+            "scene s {{
+  entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [0, 0.5, 0] }}
+  floor {{ y: 0 }}
+  {claim}
+  solver {{ {solver}dt: 0.01, steps: 10 }}
+}}"
+        )
+    };
+    let integrator = |claim: &str, solver: &str| compile(&scene(claim, solver)).unwrap().solver.integrator;
+    assert_eq!(integrator("@expect resting { max_speed: 1e-3 }", ""), Integrator::Avbd);
+    assert_eq!(integrator("@expect no_penetration { tol: 1e-3 }", ""), Integrator::Avbd);
+    assert_eq!(integrator("", ""), Integrator::Avbd);
+    for claim in [
+        "@expect energy_conservation { tol: 1e-3 }",
+        "@expect momentum_conservation { axes: \"xz\" }",
+        "@expect angular_momentum_conservation { axes: \"y\" }",
+        "@expect noether",
+    ] {
+        assert_eq!(integrator(claim, ""), Integrator::SequentialImpulses, "{claim}");
+    }
+    let named = "integrator: \"sequential_impulses\", ";
+    assert_eq!(integrator("@expect resting { max_speed: 1e-3 }", named), Integrator::SequentialImpulses);
+}
