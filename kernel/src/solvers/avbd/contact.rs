@@ -63,14 +63,14 @@ pub(super) struct Contact {
     pub(super) arms: [V; 2],
     /// What each row's error is measured from: the normal's stabilised overlap (the tangents'
     /// nothing), or a pin's gap along x, y, z.
-    pub(super) offset: [f64; 3],
+    offset: [f64; 3],
     pub(super) bound: Bound,
     pub(super) lambda: [f64; 3],
     pub(super) stiffness: [f64; 3],
     /// The starting stiffness, the ramp and the cap (in this contact's m/dt²).
-    pub(super) start: f64,
-    pub(super) ramp: f64,
-    pub(super) most: f64,
+    start: f64,
+    ramp: f64,
+    most: f64,
     pub(super) point: V,
 }
 
