@@ -46,6 +46,9 @@ pub struct Summary {
     /// Of `wall_s`, the kernel's thread's time on the checker: judging inline, or waiting for a
     /// verdict from the second thread (on two CPUs, its cost).
     pub checker_wait_s: f64,
+    /// Of `wall_s`, the kernel's thread's time outside every pass that spreads over threads and
+    /// outside the checker (Amdahl's serial part; at one thread, the serial fraction's numerator).
+    pub serial_s: f64,
     /// None for a run that took no step (no rate to give).
     pub steps_per_s: Option<f64>,
     pub ns_per_atom_step: Option<f64>,
@@ -125,6 +128,7 @@ impl Summary {
             wall_s: r.wall_s,
             checker_s: r.checker_s,
             checker_wait_s: r.checker_wait_s,
+            serial_s: r.serial_s,
             steps_per_s: (r.steps > 0).then(|| r.steps as f64 / r.wall_s),
             ns_per_atom_step: (r.steps > 0).then(|| r.wall_s * 1e9 / atom_steps),
             iterations: r.iterations.clone(),
@@ -196,6 +200,12 @@ impl Summary {
                 let _ = writeln!(s, "plan        {kind}: {plan}");
             }
             let _ = writeln!(s, "plan        checker: {}", self.checker);
+            let _ = writeln!(
+                s,
+                "serial      {:.3} s, {:.2}% of the wall: the kernel's thread outside every pass that spreads over threads (the checker's time apart)",
+                self.serial_s,
+                100.0 * self.serial_s / self.wall_s.max(f64::MIN_POSITIVE)
+            );
             if let Some(p) = &self.checker_parts {
                 let _ = writeln!(s, "plan        checker: {p}");
             }

@@ -13,6 +13,7 @@
 //! None of this is trusted: `no_penetration` is certified by the checker's own geometry.
 
 use crate::rigid::Spin;
+use crate::spread;
 use lagra_checker::model::{Extent, Floor, Model, Pin};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rayon::prelude::*;
@@ -115,10 +116,10 @@ impl Solids {
             found.map(move |(a, b, point, normal, depth)| Touch { a: Some(a), b, point, normal, depth, friction: mu })
         };
         let pairs = self.near(poses, pool);
-        match pool {
+        spread::pass(|| match pool {
             Some(pool) => pool.install(|| out.par_extend(pairs.par_iter().flat_map_iter(pair))),
             None => out.extend(pairs.iter().flat_map(pair)),
-        }
+        });
         out
     }
 
@@ -193,10 +194,10 @@ impl Solids {
             pairs.sort_unstable();
             pairs
         };
-        match pool {
+        spread::pass(|| match pool {
             Some(pool) => pool.install(|| solids.par_iter().flat_map_iter(with).collect()),
             None => solids.iter().flat_map(with).collect(),
-        }
+        })
     }
 }
 

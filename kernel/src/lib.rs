@@ -15,6 +15,7 @@ pub mod pieces;
 pub mod rigid;
 pub mod setup;
 pub mod solvers;
+pub mod spread;
 pub mod state;
 pub mod step;
 pub mod sum;

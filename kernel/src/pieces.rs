@@ -10,6 +10,7 @@
 //! The same cut serves a domain decomposition across processes: a piece is a domain's home
 //! clusters, its halo the ghosts it needs and sends back.
 
+use crate::spread::{self, each};
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
@@ -80,29 +81,31 @@ impl Pieces {
         };
         let table = || vec![(0u32, 0u32); clusters];
         let spread = pool.filter(|p| p.current_num_threads() > 1);
-        let halos: Vec<Vec<u32>> = match spread {
+        let halos: Vec<Vec<u32>> = spread::pass(|| match spread {
             Some(p) => p.install(|| (0..count).into_par_iter().zip(places).map_init(table, one).collect()),
             None => {
                 let mut seen = table();
                 (0..count).zip(places).map(|kr| one(&mut seen, kr)).collect()
             }
-        };
-        let each_piece = |f: &(dyn Fn(usize) + Sync)| match spread {
-            Some(p) => p.install(|| (0..count).into_par_iter().for_each(f)),
-            None => (0..count).for_each(f),
+        });
+        let each_piece = |f: &(dyn Fn(usize) + Sync)| {
+            spread::pass(|| match spread {
+                Some(p) => p.install(|| (0..count).into_par_iter().for_each(f)),
+                None => (0..count).for_each(f),
+            })
         };
         // each cluster's parts: its own piece's place and one for each halo that holds it,
         // counted and placed through atomic cursors (whose order varies with the threads), then
         // each cluster's few parts sorted by piece (which does not)
-        let held: Vec<AtomicUsize> = (0..clusters).map(|_| AtomicUsize::new(1)).collect();
+        let held: Vec<AtomicUsize> = each(spread, clusters, |_| AtomicUsize::new(1));
         each_piece(&|k| halos[k].iter().for_each(|&c| _ = held[c as usize].fetch_add(1, Relaxed)));
         let mut first = Vec::with_capacity(clusters + 1);
         first.push(0);
         for h in &held {
             first.push(first.last().copied().unwrap_or(0) + h.load(Relaxed));
         }
-        let cursor: Vec<AtomicUsize> = first[..clusters].iter().map(|&f| AtomicUsize::new(f)).collect();
-        let slots: Vec<AtomicU64> = (0..first[clusters]).map(|_| AtomicU64::new(0)).collect();
+        let cursor: Vec<AtomicUsize> = each(spread, clusters, |c| AtomicUsize::new(first[c]));
+        let slots: Vec<AtomicU64> = each(spread, first[clusters], |_| AtomicU64::new(0));
         let put = |c: usize, k: usize, at: usize| {
             slots[cursor[c].fetch_add(1, Relaxed)].store((k as u64) << 32 | at as u64, Relaxed)
         };
@@ -111,13 +114,15 @@ impl Pieces {
             own.clone().for_each(|c| put(c, k, c - own.start));
             halos[k].iter().enumerate().for_each(|(h, &c)| put(c as usize, k, own.len() + h));
         });
-        let mut parts: Vec<(u32, u32)> =
-            slots.into_iter().map(|s| s.into_inner()).map(|s| ((s >> 32) as u32, s as u32)).collect();
+        let mut parts: Vec<(u32, u32)> = each(spread, slots.len(), |k| {
+            let s = slots[k].load(Relaxed);
+            ((s >> 32) as u32, s as u32)
+        });
         let mut by_cluster = runs(&mut parts, first.windows(2).map(|w| w[1] - w[0]));
-        match spread {
+        spread::pass(|| match spread {
             Some(p) => p.install(|| by_cluster.par_iter_mut().for_each(|r| r.sort_unstable())),
             None => by_cluster.iter_mut().for_each(|r| r.sort_unstable()),
-        }
+        });
         let sizes = halos.iter().enumerate().map(|(k, halo)| bounds[k + 1] - bounds[k] + halo.len()).collect();
         Pieces { bounds, sizes, place, first, parts }
     }

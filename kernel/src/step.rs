@@ -3,6 +3,7 @@
 //! monomorphize around their own code. It knows no term and no solver: forces, the graph and the
 //! solvers all build on it, and it on nothing of theirs.
 
+use crate::spread;
 use crate::state::State;
 use rayon::prelude::*;
 use rayon::ThreadPool;
@@ -50,13 +51,13 @@ pub fn kick_drift(
         }
         *f = [0.0; 3];
     };
-    match spread {
+    spread::pass(|| match spread {
         Some(pool) => pool.install(|| {
             let bodies = x.par_iter_mut().zip(v.par_iter_mut()).zip(f.par_iter_mut()).zip(inverse.par_iter());
             bodies.with_min_len(BLOCK).for_each(one)
         }),
         None => x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one),
-    }
+    })
 }
 
 /// Bodies a thread takes at once in a spread pass over them.

@@ -109,10 +109,12 @@ pub fn analyse(model: &Model, table: &Table) -> Analysis {
 /// all of them.
 fn contacts_break(model: &Model, s: Symmetry) -> Vec<String> {
     use Symmetry::*;
-    let solids: Vec<f64> = model.bodies.iter().filter_map(|b| b.solid.map(|s| s.friction)).collect();
+    // (walked only where asked, and no further than needed: called once a symmetry, over bodies
+    // that may number millions)
+    let solids = || model.bodies.iter().filter_map(|b| b.solid.map(|s| s.friction));
     let mut by = vec![];
     if let Some(floor) = model.floor {
-        let gripped = floor.friction.map_or(solids.iter().any(|&mu| mu > 0.0), |mu| mu > 0.0);
+        let gripped = floor.friction.map_or_else(|| solids().any(|mu| mu > 0.0), |mu| mu > 0.0);
         if matches!(s, TranslationY | RotationX | RotationZ | BoostY) {
             by.push("the rigid floor".to_string());
         } else if gripped && matches!(s, TranslationX | TranslationZ | RotationY | BoostX | BoostZ) {
@@ -131,7 +133,7 @@ fn contacts_break(model: &Model, s: Symmetry) -> Vec<String> {
     if !held {
         by.push("the joints to the world".to_string());
     }
-    if s == Time && (model.floor.is_some() || solids.len() >= 2) {
+    if s == Time && (model.floor.is_some() || solids().nth(1).is_some()) {
         by.push("the contacts (inelastic)".to_string());
     }
     by

@@ -60,6 +60,9 @@ pub struct Report {
     /// for a verdict the second thread had not reached: on two CPUs, what it adds to the run
     /// (with what sharing the machine's caches costs the kernel's steps).
     pub checker_wait_s: f64,
+    /// Of `wall_s`, the time the kernel's thread spent outside every pass that spreads over
+    /// threads (`lagra_kernel::spread`) and outside the checker: Amdahl's serial part, measured.
+    pub serial_s: f64,
     pub stop: Option<Stop>,
     pub outcome: Outcome,
     pub predictions: Vec<Measured>,
@@ -233,7 +236,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let watched = tracing || opts.record.is_some() || !meters.is_empty() || every_restart != u64::MAX;
     let overlap = can_overlap(&scene.model, &scene.claims, watched);
 
-    let start = Instant::now();
+    let (start, spread_before) = (Instant::now(), lagra_kernel::spread::spent());
     let mut stop: Option<Stop> = None;
     let mut trace = |s: &State, potential: f64| -> Result<(), String> {
         if let Some(w) = opts.trace.as_mut() {
@@ -424,6 +427,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         Ok(checking.into_monitor())
     })?;
     let wall_s = start.elapsed().as_secs_f64();
+    let spread_s = (lagra_kernel::spread::spent() - spread_before).as_secs_f64();
     let predictions = meters
         .iter()
         .map(|(m, p)| {
@@ -455,6 +459,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
         wall_s,
         checker_s: busy.unwrap_or(waited.get()),
         checker_wait_s: waited.get(),
+        serial_s: (wall_s - spread_s - waited.get()).max(0.0),
         stop,
         outcome: monitor.finish(),
         predictions,

@@ -241,6 +241,21 @@ fn the_checkers_time_is_reported_overlapped() {
     assert!(!text("scenes/bench/lj_32k_shifted.lagra").contains("\nchecker     "));
 }
 
+/// The kernel's thread's time outside every pass that spreads (Amdahl's serial part) is
+/// measured and within the wall; on 32,000 LJ atoms it is a small share of it (the list's
+/// cut, a few prefix sums), where a clock that missed the passes would give nearly all of it.
+#[test]
+fn the_serial_part_of_the_run_is_measured() {
+    let (o, v) = run_json(&["scenes/bench/lj_32k.lagra", "--steps", "20", "--threads", "1"]);
+    assert_eq!(o.status.code(), Some(0));
+    let (wall, serial, waiting) =
+        (v["wall_s"].as_f64().unwrap(), v["serial_s"].as_f64().unwrap(), v["checker_wait_s"].as_f64().unwrap());
+    assert!(serial > 0.0 && serial + waiting <= wall, "{serial} + {waiting} of {wall}");
+    assert!(serial < 0.25 * wall, "{serial} of {wall}");
+    let explained = stdout(&lagra(&["run", "scenes/bench/lj_32k.lagra", "--steps", "2", "--explain"]));
+    assert!(explained.contains("\nserial      "), "{explained}");
+}
+
 /// `--progress always` reports the steps on stderr and changes nothing in the report;
 /// `never` (and `auto`, off a terminal) keeps stderr empty; anything else is a usage error.
 #[test]

@@ -8,6 +8,7 @@ use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
+use crate::spread;
 use crate::step::{Stride, BLOCK};
 use crate::sum::Sum;
 use crate::traverse;
@@ -147,7 +148,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         summed.resize(l.clusters(), [F64x4::default(); 3]);
         let working = Instant::now();
         let mut gathering = working;
-        let done = match &self.pool {
+        let done = spread::pass(|| match &self.pool {
             Some(pool) if pieces.count() > 1 => pool.install(|| {
                 let done = buffers.par_iter_mut().enumerate().map(zeroed).collect();
                 gathering = Instant::now();
@@ -166,7 +167,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                 f.iter_mut().enumerate().for_each(|bf| give_back(bf, summed));
                 done
             }
-        };
+        });
         *worked += gathering - working;
         *gathered += gathering.elapsed();
         done
@@ -331,10 +332,10 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             false => self.through_list::<{ clusters::FORCES_ONLY }>(&l, s, f, &[])?,
         };
         let finite = |b: &[f64; 3]| b.iter().all(|c| c.is_finite());
-        let all_finite = match self.pool.as_ref().filter(|_| f.len() >= 4 * BLOCK) {
+        let all_finite = spread::pass(|| match self.pool.as_ref().filter(|_| f.len() >= 4 * BLOCK) {
             Some(pool) => pool.install(|| f.par_iter().with_min_len(BLOCK).all(finite)),
             None => f.iter().all(finite),
-        };
+        });
         if energy.is_finite() && all_finite {
             return Ok(energy);
         }

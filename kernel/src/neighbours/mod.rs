@@ -15,15 +15,17 @@
 
 use crate::lanes::F64x4;
 use crate::pieces::Pieces;
+use crate::spread::{self, each};
 use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use std::time::{Duration, Instant};
 
 mod search;
-use search::{each, far, joined, Bounds, Columns, Search};
+use search::{far, joined, Bounds, Columns, Search};
 
 /// Bodies from which the passes over them spread over the pool's threads, a thread taking
 /// `BLOCK` at once (below, waking them costs more than the pass).
@@ -98,13 +100,11 @@ pub struct Neighbours {
     ghosts_from: usize,
 }
 
-/// Where a list's time went, as the calling thread's wall clock sees it: the builds, the part
-/// of them that runs on that thread alone whatever the pool (the serial fraction's share), and
-/// the updates between builds (the displacement test and the positions' gather).
+/// Where a list's time went, as the calling thread's wall clock sees it: the builds, and the
+/// updates between builds (the displacement test and the positions' gather).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Spent {
     pub builds: Duration,
-    pub serial: Duration,
     pub updates: Duration,
 }
 
@@ -175,7 +175,7 @@ impl Neighbours {
         let moved =
             |(p, q): (&[f64; 3], &[f64; 3])| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
         // (the two largest of a set are the same whichever way it is split)
-        let (first, second) = match spread {
+        let (first, second) = spread::pass(|| match spread {
             Some(pool) => pool.install(|| {
                 x.par_iter()
                     .zip(&self.at)
@@ -184,7 +184,7 @@ impl Neighbours {
                     .reduce(|| (0.0, 0.0), |a, b| top_two(top_two(a, b.0), b.1))
             }),
             None => x.iter().zip(&self.at).fold((0.0, 0.0), |t, pq| top_two(t, moved(pq))),
-        };
+        });
         let mut built = Duration::ZERO;
         if self.at.len() != x.len() || !(first.sqrt() + second.sqrt() < self.skin * (1.0 - 1e-9)) {
             let building = Instant::now();
@@ -204,12 +204,12 @@ impl Neighbours {
             }
             *cluster = lanes.map(F64x4::new);
         };
-        match spread {
+        spread::pass(|| match spread {
             Some(pool) => {
                 pool.install(|| self.x.par_iter_mut().enumerate().with_min_len(BLOCK / LANES).for_each(gather))
             }
             None => self.x.iter_mut().enumerate().for_each(gather),
-        }
+        });
         self.spent.updates += updating.elapsed() - built;
     }
 
@@ -278,10 +278,10 @@ impl Neighbours {
         // done early takes another
         let parts = pool.map_or(1, |p| p.current_num_threads().max(n / 1024));
         let ranges: Vec<Range<usize>> = (0..parts).map(|k| n * k / parts..n * (k + 1) / parts).collect();
-        let listed: Vec<(Vec<usize>, Vec<Pair>)> = match pool {
+        let listed: Vec<(Vec<usize>, Vec<Pair>)> = spread::pass(|| match pool {
             Some(p) if parts > 1 => p.install(|| ranges.into_par_iter().map(|r| search.part(r)).collect()),
             _ => ranges.into_iter().map(|r| search.part(r)).collect(),
-        };
+        });
         let pairs: Vec<&[Pair]> = listed.iter().map(|(_, p)| &p[..]).collect();
         self.pairs = joined(spread, &pairs, |_, p| p);
         let mut base = vec![0];
@@ -292,12 +292,14 @@ impl Neighbours {
         // (each part's starts count from 0; a last part of one, 0 past the total, ends them)
         let starts: Vec<&[usize]> = listed.iter().map(|(s, _)| &s[..]).chain([&[0][..]]).collect();
         self.start = joined(spread, &starts, |part, k| k + base[part]);
-        self.slot = vec![EMPTY; x.len()];
-        for (slot, &b) in self.bodies.iter().enumerate() {
-            if b != EMPTY {
-                self.slot[b as usize] = slot as u32;
+        // each body's slot, scattered through atomics (a body has one slot: the same either way)
+        let slot: Vec<AtomicU32> = each(spread, x.len(), |_| AtomicU32::new(EMPTY));
+        each(spread, bodies.len(), |s| {
+            if bodies[s] != EMPTY {
+                slot[bodies[s] as usize].store(s as u32, Relaxed)
             }
-        }
+        });
+        self.slot = each(spread, x.len(), |b| slot[b].load(Relaxed));
         let pairs = &self.pairs;
         self.pieces = Pieces::cut(&self.start, |p| pairs[p].j(), pool);
         self.builds += 1;

@@ -5,21 +5,13 @@
 use super::{Cluster, Pair, CENTRE, EMPTY, LANES};
 use crate::lanes::{norm2, F64x4, Lane};
 use crate::pieces::runs;
+use crate::spread::{self, each};
 use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering::Relaxed};
-
-/// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
-/// own: the same values either way).
-pub(super) fn each<U: Send>(spread: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
-    match spread {
-        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
-        None => (0..n).map(f).collect(),
-    }
-}
 
 /// The parts one after another, `map(part, value)` applied to each value, each part copied on
 /// the pool's threads if there is one: the same values either way.
@@ -31,20 +23,20 @@ pub(super) fn joined<U: Copy + Send + Sync>(
     let Some(&[fill, ..]) = parts.iter().find(|p| !p.is_empty()).copied() else { return vec![] };
     let n = parts.iter().map(|p| p.len()).sum();
     // (filled on the threads too: a fill on one would be half the work)
-    let mut all = match spread {
+    let mut all = spread::pass(|| match spread {
         Some(pool) => pool.install(|| {
             let mut all = Vec::with_capacity(n);
             all.par_extend(rayon::iter::repeat_n(fill, n));
             all
         }),
         None => vec![fill; n],
-    };
+    });
     let runs = runs(&mut all, parts.iter().map(|p| p.len()));
     let copy = |(k, run): (usize, &mut [U])| run.iter_mut().zip(parts[k]).for_each(|(to, &from)| *to = map(k, from));
-    match spread {
+    spread::pass(|| match spread {
         Some(pool) => pool.install(|| runs.into_par_iter().enumerate().for_each(copy)),
         None => runs.into_iter().enumerate().for_each(copy),
-    }
+    });
     all
 }
 
@@ -54,10 +46,10 @@ pub(super) fn joined<U: Copy + Send + Sync>(
 pub(super) fn far(w: &[[f64; 3]], r: f64, spread: Option<&ThreadPool>) -> impl Fn(usize) -> [f64; 3] {
     let largest = |p: &[f64; 3]| p.iter().fold(0.0f64, |m, c| m.max(c.abs()));
     // (the largest of a set is the same however it is split)
-    let base = match spread {
+    let base = spread::pass(|| match spread {
         Some(pool) => pool.install(|| w.par_iter().with_min_len(BLOCK).map(largest).reduce(|| 0.0, f64::max)),
         None => w.iter().map(largest).fold(0.0, f64::max),
-    } + 10.0 * r
+    }) + 10.0 * r
         + 1.0;
     move |slot| [base + 4.0 * r * slot as f64, base, base]
 }
@@ -127,11 +119,13 @@ impl Columns {
         // counted and dealt into the columns through atomic cursors (whose order within a column
         // varies with the threads; the sort by z below puts it right)
         let counts: Vec<AtomicUsize> = (0..columns).map(|_| AtomicUsize::new(0)).collect();
-        let deal = |f: &(dyn Fn(usize, usize) + Sync)| match spread {
-            Some(pool) => {
-                pool.install(|| column.par_iter().enumerate().with_min_len(BLOCK).for_each(|(i, &c)| f(i, c)))
-            }
-            None => column.iter().enumerate().for_each(|(i, &c)| f(i, c)),
+        let deal = |f: &(dyn Fn(usize, usize) + Sync)| {
+            spread::pass(|| match spread {
+                Some(pool) => {
+                    pool.install(|| column.par_iter().enumerate().with_min_len(BLOCK).for_each(|(i, &c)| f(i, c)))
+                }
+                None => column.iter().enumerate().for_each(|(i, &c)| f(i, c)),
+            })
         };
         deal(&|_, c| _ = counts[c].fetch_add(1, Relaxed));
         let mut count = vec![0usize; columns + 1];
@@ -148,10 +142,10 @@ impl Columns {
         let by_z = |run: &mut &mut [u32]| {
             run.sort_unstable_by(|&a, &b| w[a as usize][2].total_cmp(&w[b as usize][2]).then(a.cmp(&b)))
         };
-        match spread {
+        spread::pass(|| match spread {
             Some(pool) => pool.install(|| runs.par_iter_mut().for_each(by_z)),
             None => runs.iter_mut().for_each(by_z),
-        }
+        });
         // each column's clusters, the last padded with empty slots
         let mut first = Vec::with_capacity(columns + 1);
         first.push(0);

@@ -41,6 +41,7 @@
 use super::{Carried, Evaluated, Failure, Iterations, Solver};
 use crate::contact::{Pose, Solids};
 use crate::graph::LagrangianGraph;
+use crate::spread;
 use crate::state::State;
 use block::Block;
 use colours::Rows;
@@ -113,7 +114,9 @@ impl Solver for Avbd {
         let solved: Vec<Solved> = match islands {
             Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
                 self.paths.islands += 1;
-                pool.install(|| islands.par_iter().map(|i| self.solve(i, &bodies, &start, false)).collect())
+                spread::pass(|| {
+                    pool.install(|| islands.par_iter().map(|i| self.solve(i, &bodies, &start, false)).collect())
+                })
             }
             _ => {
                 let whole = Island { bodies: (0..bodies.len()).collect(), touches: found, pins: self.pins() };
@@ -333,22 +336,25 @@ fn sweep(bodies: &mut [Body], contacts: &mut [Contact], rows: &Rows, sweeps: u32
             // or from the moves as the colour began
             if parallel {
                 let frozen = &*bodies;
-                let moved: Vec<Move> =
-                    colour.par_iter().map(|&i| descend(&frozen[i], frozen, contacts, &rows.of[i])).collect();
+                let moved: Vec<Move> = spread::pass(|| {
+                    colour.par_iter().map(|&i| descend(&frozen[i], frozen, contacts, &rows.of[i])).collect()
+                });
                 for (&i, m) in colour.iter().zip(moved) {
                     bodies[i].moved = m;
                 }
             } else {
-                for &i in colour {
-                    bodies[i].moved = descend(&bodies[i], bodies, contacts, &rows.of[i]);
-                }
+                spread::pass(|| {
+                    for &i in colour {
+                        bodies[i].moved = descend(&bodies[i], bodies, contacts, &rows.of[i]);
+                    }
+                });
             }
         }
         let frozen = &*bodies;
-        residual = match parallel {
+        residual = spread::pass(|| match parallel {
             true => contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max),
             false => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
-        };
+        });
     }
     residual
 }

@@ -1,0 +1,83 @@
+//! The run's thread's clock of the passes that spread over threads, so that a run can state its
+//! serial fraction (Amdahl's f): the share of its wall time spent outside every such pass.
+//!
+//! A pass that has a parallel form is run through [`pass`], whether a pool is there to share it
+//! or not: at one thread the same pass runs alone, and is still work that more threads would
+//! share. Passes nested in one count once. Whatever the thread does outside them (a prefix sum,
+//! a table filled in order, the loop between passes) is serial, so the figure errs towards more
+//! serial, never less: work left unwrapped counts against it.
+
+use crate::neighbours::LANES;
+use crate::step::BLOCK;
+use rayon::prelude::*;
+use rayon::ThreadPool;
+use std::cell::Cell;
+use std::time::{Duration, Instant};
+
+thread_local! {
+    static SPREAD: Cell<Duration> = const { Cell::new(Duration::ZERO) };
+    static DEPTH: Cell<u32> = const { Cell::new(0) };
+}
+
+/// `work()`, its wall time on this thread counted as spread (unless a pass around it counts it).
+pub fn pass<R>(work: impl FnOnce() -> R) -> R {
+    let outermost = DEPTH.with(|d| d.replace(d.get() + 1)) == 0;
+    let started = outermost.then(Instant::now);
+    let done = work();
+    DEPTH.with(|d| d.set(d.get() - 1));
+    if let Some(t) = started {
+        SPREAD.with(|s| s.set(s.get() + t.elapsed()));
+    }
+    done
+}
+
+/// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
+/// own: the same values either way), as a pass.
+pub fn each<U: Send>(pool: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
+    pass(|| match pool {
+        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
+        None => (0..n).map(f).collect(),
+    })
+}
+
+/// This thread's time in passes so far (a run reads it before and after).
+pub fn spent() -> Duration {
+    SPREAD.with(Cell::get)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::thread::sleep;
+
+    fn nap() {
+        sleep(Duration::from_millis(20));
+    }
+
+    #[test]
+    fn a_pass_counts_its_time_and_a_nested_one_counts_once() {
+        let (before, around) = (spent(), Instant::now());
+        pass(|| {
+            nap();
+            pass(nap)
+        });
+        let (around, counted) = (around.elapsed(), spent() - before);
+        assert!(counted >= Duration::from_millis(40), "{counted:?}");
+        // counted twice, it would exceed the wall time around it by the inner nap
+        assert!(counted <= around, "{counted:?} counted in {around:?}");
+    }
+
+    #[test]
+    fn time_outside_a_pass_is_not_counted() {
+        let before = spent();
+        nap();
+        assert_eq!(spent(), before);
+    }
+
+    #[test]
+    fn each_thread_keeps_its_own_clock() {
+        let before = spent();
+        std::thread::scope(|s| _ = s.spawn(|| pass(nap)).join());
+        assert_eq!(spent(), before);
+    }
+}
