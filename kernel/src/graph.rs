@@ -11,6 +11,7 @@ use crate::contact::Solids;
 use crate::forces::derivative::{Adjoint, Direction, Wanted};
 use crate::forces::{group, Force, Frame, Kept, Parts, Pool, Singularity};
 use crate::rigid::{self, Spin};
+use crate::spread::SPREAD_FROM;
 use crate::state::State;
 use crate::step::{self, Stride};
 use crate::sum::Sum;
@@ -18,9 +19,6 @@ use lagra_checker::model::Model;
 use lagra_checker::terms::Kind;
 use nalgebra::Vector3;
 use std::sync::Arc;
-
-/// Bodies from which the passes over them spread over the run's threads (`spread`).
-const SPREAD_FROM: usize = 4 * step::BLOCK;
 
 pub struct LagrangianGraph {
     pub masses: Vec<f64>,

@@ -3,7 +3,8 @@
 //!
 //! A pass that has a parallel form is run through [`pass`], whether a pool is there to share it
 //! or not: at one thread the same pass runs alone, and is still work that more threads would
-//! share. Passes nested in one count once. Whatever the thread does outside them (a prefix sum,
+//! share. A pass too small to spread at any thread count is serial ([`pass_if`]); so is one on
+//! so few bodies that the kernel never spreads it (the kick-drift below `SPREAD_FROM`). Passes nested in one count once. Whatever the thread does outside them (a prefix sum,
 //! a table filled in order, the loop between passes) is serial, so the figure errs towards more
 //! serial, never less: work left unwrapped counts against it.
 
@@ -19,6 +20,10 @@ thread_local! {
     static DEPTH: Cell<u32> = const { Cell::new(0) };
 }
 
+/// Bodies from which a pass over them spreads over the run's threads, a thread taking `BLOCK`
+/// at once (below, waking them costs more than the pass).
+pub const SPREAD_FROM: usize = 4 * BLOCK;
+
 /// `work()`, its wall time on this thread counted as spread (unless a pass around it counts it).
 pub fn pass<R>(work: impl FnOnce() -> R) -> R {
     let outermost = DEPTH.with(|d| d.replace(d.get() + 1)) == 0;
@@ -29,6 +34,16 @@ pub fn pass<R>(work: impl FnOnce() -> R) -> R {
         SPREAD.with(|s| s.set(s.get() + t.elapsed()));
     }
     done
+}
+
+/// [`pass`] for work that spreads at more threads only if `spreads` (over `SPREAD_FROM` bodies
+/// or more; into more than one piece). Work that does not runs on the calling thread at any
+/// thread count, so it is serial, and it is not clocked: a clock costs more than a small pass.
+pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
+    match spreads {
+        true => pass(work),
+        false => work(),
+    }
 }
 
 /// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
@@ -71,7 +86,10 @@ mod tests {
     fn time_outside_a_pass_is_not_counted() {
         let before = spent();
         nap();
+        pass_if(false, nap);
         assert_eq!(spent(), before);
+        pass_if(true, nap);
+        assert!(spent() - before >= Duration::from_millis(20));
     }
 
     #[test]

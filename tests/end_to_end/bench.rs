@@ -33,18 +33,20 @@ fn bench_precision_writes_csv_plot_and_orders() {
     assert!((order("rigid_rotor", "rattle") - 2.0).abs() < 0.3, "{table}");
 }
 
-/// The gradient's cost against the forward run, and its serial part: a share of its wall time,
-/// below the whole (on 256 atoms nothing spreads, yet the pullbacks and kicks are passes).
+/// The gradient's cost against the forward run, and its serial part, which bites both ways: on
+/// 256 atoms nothing spreads at any thread count, so most of it is serial; on 32,000 the pair
+/// passes spread, so little is (a clock that missed them would give nearly all).
 #[test]
 fn bench_gradient_reports_a_ratio_and_a_serial_part() {
-    let o = lagra(&["bench", "gradient", "--quick", "--repeats", "1", "--json"]);
+    let o = lagra(&["bench", "gradient", "--repeats", "1", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-    let row = &v.as_array().unwrap()[0];
-    assert_eq!(row["system"], "lj_liquid");
-    assert!(row["ratio"].as_f64().unwrap() > 1.0, "a gradient costs more than the run: {row}");
-    let serial = row["reverse_serial"].as_f64().unwrap();
-    assert!(serial > 0.0 && serial < 0.5, "{row}");
+    let rows = v.as_array().unwrap();
+    assert_eq!((&rows[0]["system"], &rows[1]["system"]), (&"lj_liquid".into(), &"lj_32k".into()));
+    assert!(rows.iter().all(|r| r["ratio"].as_f64().unwrap() > 1.0), "a gradient costs more than the run: {v}");
+    let serial = |r: &Value| r["reverse_serial"].as_f64().unwrap();
+    assert!(serial(&rows[0]) > 0.5 && serial(&rows[0]) <= 1.0, "{v}");
+    assert!(serial(&rows[1]) > 0.0 && serial(&rows[1]) < 0.5, "{v}");
 }
 
 #[test]

@@ -8,7 +8,7 @@ use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
-use crate::spread;
+use crate::spread::{self, SPREAD_FROM};
 use crate::step::{Stride, BLOCK};
 use crate::sum::Sum;
 use crate::traverse;
@@ -148,7 +148,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
         summed.resize(l.clusters(), [F64x4::default(); 3]);
         let working = Instant::now();
         let mut gathering = working;
-        let done = spread::pass(|| match &self.pool {
+        let done = spread::pass_if(pieces.count() > 1, || match &self.pool {
             Some(pool) if pieces.count() > 1 => pool.install(|| {
                 let done = buffers.par_iter_mut().enumerate().map(zeroed).collect();
                 gathering = Instant::now();
@@ -332,7 +332,8 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             false => self.through_list::<{ clusters::FORCES_ONLY }>(&l, s, f, &[])?,
         };
         let finite = |b: &[f64; 3]| b.iter().all(|c| c.is_finite());
-        let all_finite = spread::pass(|| match self.pool.as_ref().filter(|_| f.len() >= 4 * BLOCK) {
+        let big = f.len() >= SPREAD_FROM;
+        let all_finite = spread::pass_if(big, || match self.pool.as_ref().filter(|_| big) {
             Some(pool) => pool.install(|| f.par_iter().with_min_len(BLOCK).all(finite)),
             None => f.iter().all(finite),
         });

@@ -15,7 +15,7 @@
 
 use crate::lanes::F64x4;
 use crate::pieces::Pieces;
-use crate::spread::{self, each};
+use crate::spread::{self, each, SPREAD_FROM};
 use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
@@ -26,10 +26,6 @@ use std::time::{Duration, Instant};
 
 mod search;
 use search::{far, joined, Bounds, Columns, Search};
-
-/// Bodies from which the passes over them spread over the pool's threads, a thread taking
-/// `BLOCK` at once (below, waking them costs more than the pass).
-const SPREAD_FROM: usize = 4 * BLOCK;
 
 /// The skin as a fraction of the reach (LAMMPS's 0.3 for a 2.5 cutoff).
 const SKIN: f64 = 0.12;
@@ -175,7 +171,7 @@ impl Neighbours {
         let moved =
             |(p, q): (&[f64; 3], &[f64; 3])| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
         // (the two largest of a set are the same whichever way it is split)
-        let (first, second) = spread::pass(|| match spread {
+        let (first, second) = spread::pass_if(x.len() >= SPREAD_FROM, || match spread {
             Some(pool) => pool.install(|| {
                 x.par_iter()
                     .zip(&self.at)
@@ -204,7 +200,7 @@ impl Neighbours {
             }
             *cluster = lanes.map(F64x4::new);
         };
-        spread::pass(|| match spread {
+        spread::pass_if(x.len() >= SPREAD_FROM, || match spread {
             Some(pool) => {
                 pool.install(|| self.x.par_iter_mut().enumerate().with_min_len(BLOCK / LANES).for_each(gather))
             }

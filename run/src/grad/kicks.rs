@@ -7,7 +7,7 @@
 use super::Run;
 use lagra_kernel::forces::derivative::Adjoint;
 use lagra_kernel::graph::LagrangianGraph;
-use lagra_kernel::spread;
+use lagra_kernel::spread::{self, SPREAD_FROM};
 use lagra_kernel::step::BLOCK;
 use rayon::prelude::*;
 
@@ -34,7 +34,7 @@ impl Scratch {
             *k = std::array::from_fn(|c| h * w * (a[c] + b[c]));
         };
         let g = &run.graph;
-        spread::pass(|| match g.spread() {
+        spread::pass_if(lam_v.len() >= SPREAD_FROM, || match g.spread() {
             Some(pool) => pool.install(|| {
                 let mine = (self.kicked.par_iter_mut().zip(pb.x.par_iter_mut()).zip(pb.v.par_iter_mut()))
                     .zip(pb.m.par_iter_mut().zip(pb.q.par_iter_mut()));
@@ -77,7 +77,7 @@ pub(super) fn closing_and_drift(run: &Run, lam: &mut Adjoint, pb: &Adjoint, f: &
         (*o, *v) = (next, next);
     };
     let g: &LagrangianGraph = &run.graph;
-    spread::pass(|| match g.spread() {
+    spread::pass_if(f.len() >= SPREAD_FROM, || match g.spread() {
         Some(pool) => pool.install(|| {
             let mine = (lam.x.par_iter_mut().zip(lam.v.par_iter_mut()).zip(opening.par_iter_mut()))
                 .zip(lam.m.par_iter_mut().zip(lam.q.par_iter_mut()));
@@ -107,7 +107,7 @@ type DriftPass<'a> = (
 /// same bits on any number of threads.
 pub(super) fn norm(g: &LagrangianGraph, a: &Adjoint) -> f64 {
     let block = |(x, v): (&[[f64; 3]], &[[f64; 3]])| x.iter().chain(v).flatten().map(|c| c * c).sum::<f64>();
-    let parts: Vec<f64> = spread::pass(|| match g.spread() {
+    let parts: Vec<f64> = spread::pass_if(a.x.len() >= SPREAD_FROM, || match g.spread() {
         Some(pool) => pool.install(|| a.x.par_chunks(BLOCK).zip(a.v.par_chunks(BLOCK)).map(block).collect()),
         None => a.x.chunks(BLOCK).zip(a.v.chunks(BLOCK)).map(block).collect(),
     });
