@@ -8,8 +8,6 @@
 //! a table filled in order, the loop between passes) is serial, so the figure errs towards more
 //! serial, never less: work left unwrapped counts against it.
 
-use crate::neighbours::LANES;
-use crate::step::BLOCK;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::cell::Cell;
@@ -19,6 +17,12 @@ thread_local! {
     static SPREAD: Cell<Duration> = const { Cell::new(Duration::ZERO) };
     static DEPTH: Cell<u32> = const { Cell::new(0) };
 }
+
+/// Bodies a thread takes at once in a spread pass over them.
+pub const BLOCK: usize = 4096;
+
+/// Items a thread takes at once in [`each`]: a block's worth of clusters of four bodies.
+const EACH: usize = BLOCK / 4;
 
 /// Bodies from which a pass over them spreads over the run's threads, a thread taking `BLOCK`
 /// at once (below, waking them costs more than the pass).
@@ -50,7 +54,7 @@ pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
 /// own: the same values either way), as a pass.
 pub fn each<U: Send>(pool: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
     pass(|| match pool {
-        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(BLOCK / LANES).map(f).collect()),
+        Some(pool) => pool.install(|| (0..n).into_par_iter().with_min_len(EACH).map(f).collect()),
         None => (0..n).map(f).collect(),
     })
 }

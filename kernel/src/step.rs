@@ -3,6 +3,7 @@
 //! monomorphize around their own code. It knows no term and no solver: forces, the graph and the
 //! solvers all build on it, and it on nothing of theirs.
 
+pub use crate::spread::BLOCK;
 use crate::spread::{self, SPREAD_FROM};
 use crate::state::State;
 use rayon::prelude::*;
@@ -64,9 +65,6 @@ pub fn kick_drift(
         None => spread::pass(|| x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one)),
     }
 }
-
-/// Bodies a thread takes at once in a spread pass over them.
-pub const BLOCK: usize = 4096;
 
 /// The step counter and the clock after one step.
 pub fn tick(s: &mut State, dt: f64) {
