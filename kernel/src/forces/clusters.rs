@@ -189,7 +189,7 @@ fn rows<T: Paired, const SUM: u8, const DIAGONAL: bool>(
 
 /// What one instance's pullback through the cluster list reads: its row and parameters, its
 /// reach², which parameters' adjoints are wanted, and the covector g by cluster (as `Neighbours::x`,
-/// zeros in empty slots).
+/// zeros in empty slots; empty for the potential's gradient, which reads none).
 pub struct Pulled<'a, R> {
     pub row: &'a R,
     pub p: &'a [f64],
@@ -201,12 +201,13 @@ pub struct Pulled<'a, R> {
 /// The transpose of the forces' derivatives applied to g, over the i-clusters `range`, four
 /// pairs at a time with the hand-derived jets (`Paired::jet` on `F64x4`): each pair's
 /// w = s·Δg + s_r (Δg·d) d, Δg = gᵢ − gⱼ, added to j and taken from i in `f` (a piece's buffer,
-/// placed as in `kernel`), and ∂s/∂p (Δg·d) to the wanted parameters' sums. Pairs beyond the
-/// reach, empty slots and a cluster's lower triangle with itself are masked, as in `kernel`.
+/// placed as in `kernel`), and ∂s/∂p (Δg·d) to the wanted parameters' sums. With `POTENTIAL`,
+/// the gradient of the energy instead (g unread): w = s·d, and ∂V/∂p. Pairs beyond the reach,
+/// empty slots and a cluster's lower triangle with itself are masked, as in `kernel`.
 /// The term's jet must exist (`Pairs::jets_everywhere`). Where the CPU has AVX-512, the same
 /// code compiled for it, as `kernel` is: its twelve i-lane accumulators, the pair's Δg, w and the
 /// parameters' sums spill from 16 registers, not from 32.
-pub fn pullback<T: Paired>(
+pub fn pullback<T: Paired, const POTENTIAL: bool>(
     l: &Neighbours,
     at: &Pulled<T::Row>,
     range: Range<usize>,
@@ -216,27 +217,27 @@ pub fn pullback<T: Paired>(
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx512vl") {
         // SAFETY: the CPU has the features `wide_pullback` is compiled for, checked just above.
-        return unsafe { wide_pullback::<T>(l, at, range, place, f) };
+        return unsafe { wide_pullback::<T, POTENTIAL>(l, at, range, place, f) };
     }
-    portable_pullback::<T>(l, at, range, place, f)
+    portable_pullback::<T, POTENTIAL>(l, at, range, place, f)
 }
 
 /// `portable_pullback` for AVX-512's 32 registers (the same 256-bit instructions: the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 #[inline(never)]
-fn wide_pullback<T: Paired>(
+fn wide_pullback<T: Paired, const POTENTIAL: bool>(
     l: &Neighbours,
     at: &Pulled<T::Row>,
     range: Range<usize>,
     place: &[u32],
     f: &mut [Cluster],
 ) -> [Sum; 3] {
-    portable_pullback::<T>(l, at, range, place, f)
+    portable_pullback::<T, POTENTIAL>(l, at, range, place, f)
 }
 
 #[inline(always)]
-fn portable_pullback<T: Paired>(
+fn portable_pullback<T: Paired, const POTENTIAL: bool>(
     l: &Neighbours,
     at: &Pulled<T::Row>,
     range: Range<usize>,
@@ -253,7 +254,7 @@ fn portable_pullback<T: Paired>(
         let listed = l.start[ic]..l.start[ic + 1];
         for (p, &slot) in l.pairs[listed.clone()].iter().zip(&place[listed]) {
             let (jc, image) = (p.j(), p.image());
-            let (xi, xj, sh, gi, gj) = (&l.x[ic], &l.x[jc], &l.shifts[image], &at.g[ic], &at.g[jc]);
+            let (xi, xj, sh) = (&l.x[ic], &l.x[jc], &l.shifts[image]);
             let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
             let mut wj = [zero; 3];
             for (a, fa) in fi.iter_mut().enumerate() {
@@ -268,7 +269,19 @@ fn portable_pullback<T: Paired>(
                     continue;
                 }
                 let jet = T::jet(at.row, at.p, r2).expect("a jet for every instance");
+                if POTENTIAL {
+                    let s = inside.and(jet.s);
+                    for c in 0..3 {
+                        wj[c] = s.mul_add(d[c], wj[c]);
+                        fa[c] = d[c].mul_neg_add(s, fa[c]);
+                    }
+                    for &w in at.wanted {
+                        dp[w] = dp[w] + inside.and(jet.dv[w]);
+                    }
+                    continue;
+                }
                 let (s, s_r) = (inside.and(jet.s), inside.and(jet.s_r));
+                let (gi, gj) = (&at.g[ic], &at.g[jc]);
                 let dg = [
                     F64x4::splat(gi[0].lane(a)) - gj[0],
                     F64x4::splat(gi[1].lane(a)) - gj[1],

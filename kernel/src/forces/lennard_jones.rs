@@ -47,8 +47,9 @@ impl Lj {
 
     /// The plain term's radial derivatives at r² for parameters (ε, σ, ...): with u = (σ/r)⁶,
     /// s = 24ε(u − 2u²)/r², s_r = 96ε(7u² − 2u)/r⁴, ∂s/∂ε = 24(u − 2u²)/r², ∂s/∂σ =
-    /// (144ε/σ)(u − 4u²)/r². One division a row, as in the force (1/r²; 144ε/σ is a scalar
-    /// of the instance): the pullback's rows waited on three.
+    /// (144ε/σ)(u − 4u²)/r², ∂V/∂ε = 4(u² − u), ∂V/∂σ = (24ε/σ)(2u² − u). One division a row,
+    /// as in the force (1/r²; 144ε/σ is a scalar of the instance): the pullback's rows waited
+    /// on three.
     #[inline(always)]
     pub(crate) fn jet_at<L: Lane>(&self, p: &[f64], r2: L) -> Jet<L> {
         let (eps, sigma) = (p[0], p[1]);
@@ -59,7 +60,8 @@ impl Lj {
         let s = attraction * self.eps24;
         let s_r = (u * 7.0 * u - u * 2.0) * (96.0 * eps) * inv * inv;
         let ds_sigma = (u - u * 4.0 * u) * (144.0 * eps / sigma) * inv;
-        Jet { s, s_r, ds: [attraction * 24.0, ds_sigma, L::splat(0.0)] }
+        let dv = [(u * u - u) * 4.0, (u * 2.0 * u - u) * (24.0 * eps / sigma), L::splat(0.0)];
+        Jet { s, s_r, ds: [attraction * 24.0, ds_sigma, L::splat(0.0)], dv }
     }
 
     /// The plain term and its derivative at r²: (V, dV/dr / r).
@@ -109,9 +111,12 @@ impl Paired for Shifted {
     fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
         lj.shifted_at(r2)
     }
-    /// The shift is a constant: the force's derivatives are the plain term's.
+    /// The shift is a constant: the force's derivatives are the plain term's. The energy's
+    /// lose the shift's, ∂V(r_c)/∂p, and ∂V(r_c)/∂r_c = V′(r_c) = r_c s(r_c).
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
-        Some(lj.jet_at(p, r2))
+        let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
+        let dv = [here.dv[0] - at_rc.dv[0], here.dv[1] - at_rc.dv[1], L::splat(-lj.rc * at_rc.s)];
+        Some(Jet { dv, ..here })
     }
 }
 
@@ -130,13 +135,20 @@ impl Paired for ForceShifted {
         lj.force_shifted_at(r2)
     }
     /// With V′(r_c) = r_c s(r_c) taken off the force: s − V′(r_c)/r, s_r + V′(r_c)/r³, and the
-    /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c).
+    /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c). The
+    /// energy V(r) − V(r_c) − (r − r_c)V′(r_c): ∂/∂p of each part, and ∂/∂r_c = −(r − r_c)V″(r_c).
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
         let r = r2.sqrt();
         let curvature = at_rc.s + lj.rc2 * at_rc.s_r;
         let slope = L::splat(lj.slope);
+        let out = r - L::splat(lj.rc);
+        let dv = std::array::from_fn(|k| match k {
+            2 => out * -curvature,
+            _ => here.dv[k] - at_rc.dv[k] - out * (lj.rc * at_rc.ds[k]),
+        });
         Some(Jet {
+            dv,
             s: here.s - slope / r,
             s_r: here.s_r + slope / (r2 * r),
             ds: [
@@ -169,24 +181,33 @@ mod tests {
         }
     }
 
-    /// The hand-derived jets are the definition's own radial derivatives.
+    /// The hand-derived jets are the definition's own radial derivatives, of the force and of the
+    /// energy.
     #[test]
     fn jets_are_the_definitions_derivatives() {
         use super::{ForceShifted, Plain, Shifted};
-        use crate::derivatives::exact::{radial, radial_sensitivities};
+        use crate::derivatives::exact::{radial, radial_potential, radial_sensitivities};
         use crate::forces::dual::Rng;
         use crate::forces::{Jet, Paired};
         fn holds<T: Paired>(kind: Kind, p: &[f64], r: f64) {
             let jet: Jet = T::jet(&T::row(p), p, r * r).unwrap();
             let exact = radial(kind, p, [1.0; 4], [[0.0; 2]; 2], r);
             let ds = radial_sensitivities(kind, p, [1.0; 4], [[0.0; 2]; 2], r, &(0..p.len()).collect::<Vec<_>>());
-            let close = |a: f64, b: f64, what: &str| {
-                assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-8), "{kind:?} r {r} {what}: {a} vs {b}")
+            let near = |a: f64, b: f64, scale: f64, what: &str| {
+                assert!((a - b).abs() <= 1e-12 * scale.max(1e-8), "{kind:?} r {r} {what}: {a} vs {b}")
             };
+            let close = |a: f64, b: f64, what: &str| near(a, b, b.abs(), what);
             close(jet.s, exact.s, "s");
             close(jet.s_r, exact.s_r, "s_r");
             for (k, d) in ds.iter().enumerate() {
                 close(jet.ds[k], *d, &format!("ds[{k}]"));
+            }
+            // the cut variants' energies take off their values at r_c, which near r_c leaves a
+            // small difference of large parts: the plain term's ∂V/∂p is their size
+            let plain = super::Lj::new(p[0], p[1], 1.0, 0.0).jet_at(p, r * r);
+            let (_, dv) = radial_potential(kind, p, [1.0; 4], [[0.0; 2]; 2], r, &(0..p.len()).collect::<Vec<_>>());
+            for (k, d) in dv.iter().enumerate() {
+                near(jet.dv[k], *d, d.abs().max(plain.dv[k].abs()), &format!("dv[{k}]"));
             }
         }
         let mut rng = Rng::new(3);

@@ -234,19 +234,22 @@ pub trait Paired {
     /// `None`: the gradient code takes them from the definition (`derivatives::exact::radial`),
     /// to which a test holds every hand-derived one.
     /// Written once over a lane type, like `radial`: one pair in the scalar loops, four in the
-    /// cluster pullback (`clusters::pullback`).
+    /// cluster pullbacks of the force and of the potential (`clusters::pullback`).
     fn jet<L: Lane>(_r: &Self::Row, _p: &[f64], _r2: L) -> Option<Jet<L>> {
         None
     }
 }
 
-/// s = V′(r)/r (the force on i is s·d), s_r = (V″ − s)/r² (so δs = s_r·(d·δd)) and ∂s/∂p for
-/// each parameter p of the instance (at most three), for one pair (`f64`) or four (`F64x4`).
+/// s = V′(r)/r (the force on i is s·d), s_r = (V″ − s)/r² (so δs = s_r·(d·δd)), ∂s/∂p and
+/// ∂V/∂p for each parameter p of the instance (at most three), for one pair (`f64`) or four
+/// (`F64x4`). The force's pullback reads s, s_r and ∂s/∂p, the potential's s and ∂V/∂p (what
+/// one does not read, inlined, is not computed).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Jet<L = f64> {
     pub s: L,
     pub s_r: L,
     pub ds: [L; 3],
+    pub dv: [L; 3],
 }
 
 /// The force on one body and its energy, from its position, velocity, mass and charge.

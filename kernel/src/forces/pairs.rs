@@ -198,19 +198,24 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     /// The pullback through the cluster-pair list with the hand-derived jets, four pairs at a
     /// time (`clusters::pullback`), piece by piece like the forces (`on_pieces`): each
     /// instance's parameters' adjoints summed in piece order, the positions' through the
-    /// pieces' buffers. The same bits on any number of threads.
-    fn listed_pullback(&self, l: &Neighbours, g: &[[f64; 3]], each: &[PairDerivative], out: &mut Adjoint) {
+    /// pieces' buffers. The same bits on any number of threads. With g, the forces' pullback
+    /// of g; without, the gradient of the energy.
+    fn listed_pullback(&self, l: &Neighbours, g: Option<&[[f64; 3]]>, each: &[PairDerivative], out: &mut Adjoint) {
         let pieces = &l.pieces;
         // g by cluster, as the kernel reads positions (zeros in empty slots)
-        let g: Vec<Cluster> = (0..l.clusters())
-            .map(|c| {
-                let at = |a: usize, k: usize| match l.bodies[LANES * c + a] {
-                    EMPTY => 0.0,
-                    b => g[b as usize][k],
-                };
-                std::array::from_fn(|k| F64x4::new(std::array::from_fn(|a| at(a, k))))
-            })
-            .collect();
+        let g: Vec<Cluster> = match g {
+            None => vec![],
+            Some(g) => (0..l.clusters())
+                .map(|c| {
+                    let at = |a: usize, k: usize| match l.bodies[LANES * c + a] {
+                        EMPTY => 0.0,
+                        b => g[b as usize][k],
+                    };
+                    std::array::from_fn(|k| F64x4::new(std::array::from_fn(|a| at(a, k))))
+                })
+                .collect(),
+        };
+        let potential = g.is_empty();
         let wanted: Vec<Vec<usize>> =
             each.iter().map(|pd| pd.which().iter().copied().filter(|&w| w < pd.p.len()).collect()).collect();
         let params: Vec<Vec<[Sum; 3]>> = self.on_pieces(l, &mut out.x, |k, buffer| {
@@ -218,7 +223,10 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                 .map(|(n, pd)| {
                     let at =
                         clusters::Pulled { row: &self.rows[n], p: pd.p, reach2: pd.reach2, wanted: &wanted[n], g: &g };
-                    clusters::pullback::<T>(l, &at, pieces.own(k), &pieces.place, buffer)
+                    match potential {
+                        true => clusters::pullback::<T, true>(l, &at, pieces.own(k), &pieces.place, buffer),
+                        false => clusters::pullback::<T, false>(l, &at, pieces.own(k), &pieces.place, buffer),
+                    }
                 })
                 .collect()
         });
@@ -444,7 +452,7 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
         if let Some(list) = self.list.as_ref().filter(|_| self.jets_everywhere(&each)) {
             let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
             l.update(s.x, &self.cell, self.pool.as_deref());
-            self.listed_pullback(&l, g, &each, out);
+            self.listed_pullback(&l, Some(g), &each, out);
             return Ok(());
         }
         self.within_reach(s, |i, j, d| {
@@ -459,6 +467,12 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
     }
     fn potential_pullback(&self, s: &Frame, wanted: &Wanted, out: &mut Adjoint) -> Result<(), Singularity> {
         let each = self.derivatives_for(wanted);
+        if let Some(list) = self.list.as_ref().filter(|_| self.jets_everywhere(&each)) {
+            let mut l = list.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            l.update(s.x, &self.cell, self.pool.as_deref());
+            self.listed_pullback(&l, None, &each, out);
+            return Ok(());
+        }
         self.within_reach(s, |i, j, d| {
             if d == [0.0; 3] {
                 return Err(coincident(self.name, i, j));

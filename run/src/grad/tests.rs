@@ -135,6 +135,16 @@ fn a_liquid_through_list_rebuilds_and_cutoffs() {
             assert!((x.1 - y.1).abs() <= 1e-10 * x.1.abs().max(y.1.abs()), "{term}: {x:?} vs {y:?}");
         }
     }
+    // the energy at the end, whose gradient goes through the list with the jets' ∂V/∂p (the
+    // cut-off's too, which moves the shifted and force-shifted energies); the two modes share
+    // it, so the central difference is what holds it
+    for (term, cut) in [("lj", true), ("lj_shifted", true), ("lj_force_shifted", true), ("wca", false)] {
+        let (text, wrt) = match cut {
+            true => (liquid(term), format!("{term}.epsilon,{term}.sigma,{term}.cutoff")),
+            false => (liquid(term).replace(", cutoff: 1.8", ""), format!("{term}.epsilon,{term}.sigma")),
+        };
+        agree(&text, "energy@end", &wrt);
+    }
 }
 
 /// Through a list cut into several pieces (6,912 atoms: 3 pieces), the reverse gradient is the
@@ -165,7 +175,8 @@ fn a_big_liquid_gives_the_same_gradient_on_any_number_of_threads() {
 }
 
 /// 16,384 atoms, enough that the passes between pullbacks (`kicks`) spread over the threads: the
-/// same bits on 1 and 3 threads, masses' adjoints included, and forward mode's values to 1e-10.
+/// same bits on 1 and 3 threads, masses' adjoints and the energy's pullback through the list's
+/// pieces included, and forward mode's values to 1e-10.
 #[test]
 fn the_passes_between_pullbacks_spread_with_the_same_bits() {
     let scene = compile(
@@ -174,7 +185,7 @@ fn the_passes_between_pullbacks_spread_with_the_same_bits() {
     )
     .unwrap();
     assert_eq!(scene.x0.len(), 16_384);
-    let wrt = "lj_force_shifted.epsilon,body[5].mass";
+    let wrt = "lj_force_shifted.epsilon,lj_force_shifted.cutoff,body[5].mass";
     let on = |threads: usize| grad_on(&scene, "energy@end", wrt, Method::Reverse, threads);
     let (one, three) = (on(1), on(3));
     let bits = |g: &Gradient| g.gradient.iter().map(|g| g.1.to_bits()).collect::<Vec<_>>();
