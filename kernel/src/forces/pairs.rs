@@ -201,7 +201,7 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     /// pieces' buffers. The same bits on any number of threads. With g, the forces' pullback
     /// of g; without, the gradient of the energy.
     fn listed_pullback(&self, l: &Neighbours, g: Option<&[[f64; 3]]>, each: &[PairDerivative], out: &mut Adjoint) {
-        let pieces = &l.pieces;
+        let (pieces, potential) = (&l.pieces, g.is_none());
         // g by cluster, as the kernel reads positions (zeros in empty slots)
         let g: Vec<Cluster> = match g {
             None => vec![],
@@ -215,7 +215,6 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                 })
                 .collect(),
         };
-        let potential = g.is_empty();
         let wanted: Vec<Vec<usize>> =
             each.iter().map(|pd| pd.which().iter().copied().filter(|&w| w < pd.p.len()).collect()).collect();
         let params: Vec<Vec<[Sum; 3]>> = self.on_pieces(l, &mut out.x, |k, buffer| {
