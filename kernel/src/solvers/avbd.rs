@@ -45,12 +45,12 @@ use crate::spread;
 use crate::state::State;
 use block::Block;
 use colours::Rows;
-use contact::{pin_key, Bound, Contact};
+use contact::{Bound, Contact};
 use islands::Island;
 use lagra_checker::model::Pin;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use warm::Warm;
 
 type V = Vector3<f64>;
 /// A body's move over the step: displacement, then rotation vector.
@@ -61,8 +61,8 @@ pub struct Avbd {
     pub solids: Solids,
     /// Sweeps over the bodies per step.
     pub sweeps: u32,
-    /// Last step's contacts by pair: place, λ and k of the three rows.
-    warm: HashMap<(usize, usize), Vec<(V, [f64; 3], [f64; 3])>>,
+    /// Last step's contacts: place, λ and k of the three rows.
+    warm: Warm,
     iterations: Iterations,
     paths: Paths,
 }
@@ -84,7 +84,7 @@ impl Avbd {
             what: "AVBD sweeps (residual: the largest overlap beyond the stabilised target, or joint gap)",
             ..Default::default()
         };
-        Avbd { at, solids, sweeps, warm: HashMap::new(), iterations, paths: Paths::default() }
+        Avbd { at, solids, sweeps, warm: Warm::default(), iterations, paths: Paths::default() }
     }
 }
 
@@ -164,24 +164,24 @@ impl Solver for Avbd {
         &self.at
     }
 
-    /// The forces and each contact's λ and k, pairs in order (the map's own order is arbitrary).
+    /// The forces and each contact's λ and k, pairs in order.
     fn carried(&self) -> Result<Carried, String> {
-        let mut warm: Vec<_> = self.warm.iter().collect();
-        warm.sort_by_key(|w| *w.0);
-        let places = |w: &[(V, [f64; 3], [f64; 3])]| w.iter().map(|(p, l, _)| ((*p).into(), *l)).collect();
+        let warm = self.warm.pairs();
         let stiffness = warm.iter().map(|(_, w)| w.iter().map(|c| c.2).collect()).collect();
-        let warm = warm.iter().map(|(pair, w)| (**pair, places(w))).collect();
+        let warm =
+            warm.into_iter().map(|(pair, w)| (pair, w.iter().map(|(p, l, _)| ((*p).into(), *l)).collect())).collect();
         Ok(Carried { warm, stiffness, ..Carried::forces(&self.at) })
     }
 
     fn take_up(&mut self, c: &Carried) {
         self.at = c.evaluated();
-        self.warm = c
+        let pairs: warm::Pairs = c
             .warm
             .iter()
             .zip(&c.stiffness)
             .map(|((pair, w), k)| (*pair, w.iter().zip(k).map(|((p, l), k)| (V::from(*p), *l, *k)).collect()))
             .collect();
+        self.warm = Warm::from_pairs(&pairs);
     }
 
     fn rotates(&self) -> bool {
@@ -241,7 +241,7 @@ impl Avbd {
             island.touches.iter().map(|t| Contact::new(t, &poses, &bodies, margin)).collect();
         for (j, p) in &island.pins {
             let mut c = Contact::pin(*j, p, &poses, &bodies, margin);
-            if let Some((_, lambda, stiffness)) = self.warm.get(&pin_key(*j)).and_then(|w| w.first()) {
+            if let Some((_, lambda, stiffness)) = self.warm.pin(*j) {
                 c.warm_from(lambda, stiffness);
             }
             contacts.push(c);
@@ -251,7 +251,7 @@ impl Avbd {
             if c.a.is_some_and(|a| !rows.grounded[a] && !rows.grounded[c.b]) {
                 c.soften();
             }
-            self.start_warm(c, (c.a.map_or(usize::MAX, |a| island.bodies[a]), island.bodies[c.b]));
+            self.start_warm(c, c.a.map(|a| island.bodies[a]), island.bodies[c.b]);
         }
         for (b, of) in bodies.iter_mut().zip(&rows.of) {
             if of.is_empty() {
@@ -300,10 +300,10 @@ impl Avbd {
     /// A new contact starts from last step's contact of the same pair (a, b in the state's
     /// numbering, a none: the floor) nearest its point (within twice the margin), its λ and k
     /// carried as `warm_from` says.
-    fn start_warm(&self, c: &mut Contact, pair: (usize, usize)) {
+    fn start_warm(&self, c: &mut Contact, a: Option<usize>, b: usize) {
         let reach = 4.0 * self.solids.margin * self.solids.margin;
-        let Some(old) = self.warm.get(&pair) else { return };
-        let near = old.iter().map(|w| ((w.0 - c.point).norm_squared(), w)).min_by(|a, b| a.0.total_cmp(&b.0));
+        let near =
+            self.warm.between(a, b).map(|w| ((w.0 - c.point).norm_squared(), w)).min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((_, (_, lambda, stiffness))) = near.filter(|n| n.0 <= reach) {
             c.warm_from(lambda, stiffness);
         }
@@ -315,13 +315,13 @@ impl Avbd {
         self.warm.clear();
         for c in contacts {
             if let Bound::Pin(j) = c.bound {
-                self.warm.insert(pin_key(j), vec![(c.point, c.lambda, c.stiffness)]);
+                self.warm.keep_pin(j, (c.point, c.lambda, c.stiffness));
                 continue;
             }
             let m = &bodies[c.b].moved;
             let turn: V = m.fixed_rows::<3>(3).into_owned();
             let place = c.point + m.fixed_rows::<3>(0) + turn.cross(&(c.point - start[c.b].centre));
-            self.warm.entry((c.a.unwrap_or(usize::MAX), c.b)).or_default().push((place, c.lambda, c.stiffness));
+            self.warm.keep(c.a, c.b, (place, c.lambda, c.stiffness));
         }
     }
 }
@@ -384,3 +384,4 @@ mod contact;
 mod islands;
 #[cfg(test)]
 mod tests;
+mod warm;

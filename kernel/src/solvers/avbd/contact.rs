@@ -82,11 +82,6 @@ pub(super) enum Bound {
     Pin(usize),
 }
 
-/// The warm-start key of pin j: (j, none), which no contact's (a, b) can be (b is a body).
-pub(super) fn pin_key(j: usize) -> (usize, usize) {
-    (j, usize::MAX)
-}
-
 impl Contact {
     /// A contact found at poses `start`: its rows' Jacobians there.
     pub(super) fn new(t: &Touch, start: &[Pose], bodies: &[Body], margin: f64) -> Contact {
