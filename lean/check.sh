@@ -12,9 +12,10 @@
 # toolchain, `lake build` in lean/ does the same for the package (see docs/lean.md).
 #
 #   bash lean/check.sh            # check; exit 1 if Lean rejects anything or the sorry count moved
-#   LAGRA_BIN=target/release/lagra bash lean/check.sh
-#                                 # use that binary, not `cargo build` (CI runs this beside
-#                                 # `cargo test`, whose lock on target/ a build would wait for)
+#   LAGRA_BIN=target/release-tests/lagra bash lean/check.sh
+#                                 # use that binary, not `cargo build` (CI runs this with the
+#                                 # tests' build, beside `cargo test`, whose lock on target/ a
+#                                 # build would wait for)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cache=${LAGRA_LEAN_CACHE:-$HOME/.cache/lagra-lean}

@@ -1,6 +1,6 @@
 """The Python package against the `lagra` command: the same reports, the same frames, and every
-kind of bad input. Run from the repository root after `cargo build --release` (the README's test
-command does both)."""
+kind of bad input. Run from the repository root after the README's test command has built the
+binary (`cargo test --workspace --profile release-tests`), or with LAGRA_BIN naming one."""
 
 import json
 import os
@@ -18,7 +18,9 @@ import lagra
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "scenes"
-LAGRA = ROOT / "target" / "release" / "lagra"
+# the command-line binary of the README's test build (`cargo test --profile release-tests`), or
+# the one LAGRA_BIN names
+LAGRA = Path(os.environ.get("LAGRA_BIN", ROOT / "target" / "release-tests" / "lagra"))
 
 
 def cli(*args):
