@@ -49,6 +49,7 @@ pub fn threads_of(threads: usize) -> Result<Pool, String> {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .thread_name(|i| format!("lagra-kernel-{i}"))
+                .start_handler(crate::spread::never_clocked)
                 .build()
                 .map_err(|e| format!("starting {n} threads: {e}"))?,
         )),
