@@ -100,15 +100,20 @@ impl Solids {
     /// then each near pair's, pairs in index order (the pairs on the pool's threads where there is
     /// one, gathered in that order: the same contacts for any thread count).
     pub fn touching(&self, poses: &[Pose], pool: Option<&ThreadPool>) -> Vec<Touch> {
-        let mut out = vec![];
-        if let Some(floor) = self.floor {
-            for (i, (s, p)) in self.solids.iter().zip(poses).enumerate() {
+        let floor = |(i, (s, p)): (usize, (&Option<Solid>, &Pose))| {
+            let found = self.floor.map(|floor| {
                 let mu = floor.friction.unwrap_or(s.map_or(0.0, |s| s.friction));
-                for (point, depth) in on_floor(s.map(|s| s.extent), p, floor.y, self.margin) {
-                    out.push(Touch { a: None, b: i, point, normal: V::y(), depth, friction: mu });
-                }
-            }
-        }
+                on_floor(s.map(|s| s.extent), p, floor.y, self.margin).map(move |(point, depth)| Touch {
+                    a: None,
+                    b: i,
+                    point,
+                    normal: V::y(),
+                    depth,
+                    friction: mu,
+                })
+            });
+            found.into_iter().flatten()
+        };
         let pair = |&(i, j): &(usize, usize)| {
             let (si, sj) = (self.solids[i].expect("a solid"), self.solids[j].expect("a solid"));
             let mu = (si.friction * sj.friction).sqrt();
@@ -116,9 +121,16 @@ impl Solids {
             found.map(move |(a, b, point, normal, depth)| Touch { a: Some(a), b, point, normal, depth, friction: mu })
         };
         let pairs = self.near(poses, pool);
+        let mut out = vec![];
         spread::pass(|| match pool {
-            Some(pool) => pool.install(|| out.par_extend(pairs.par_iter().flat_map_iter(pair))),
-            None => out.extend(pairs.iter().flat_map(pair)),
+            Some(pool) => pool.install(|| {
+                out.par_extend(self.solids.par_iter().zip(poses).enumerate().flat_map_iter(floor));
+                out.par_extend(pairs.par_iter().flat_map_iter(pair));
+            }),
+            None => {
+                out.extend(self.solids.iter().zip(poses).enumerate().flat_map(floor));
+                out.extend(pairs.iter().flat_map(pair));
+            }
         });
         out
     }
@@ -218,13 +230,13 @@ fn corners(p: &Pose, h: [f64; 3]) -> [V; 8] {
 }
 
 /// The points of a body within `margin` of the floor y = y₀ or below it, with their depths.
-fn on_floor(extent: Option<Extent>, p: &Pose, y0: f64, margin: f64) -> Vec<(V, f64)> {
-    let points: Vec<V> = match extent {
-        Some(Extent::Cuboid(h)) => corners(p, h).to_vec(),
-        Some(Extent::Ball(r)) => vec![p.centre - V::y() * r],
-        None => vec![p.centre],
+fn on_floor(extent: Option<Extent>, p: &Pose, y0: f64, margin: f64) -> impl Iterator<Item = (V, f64)> {
+    let (points, n) = match extent {
+        Some(Extent::Cuboid(h)) => (corners(p, h), 8),
+        Some(Extent::Ball(r)) => ([p.centre - V::y() * r; 8], 1),
+        None => ([p.centre; 8], 1),
     };
-    points.into_iter().map(|q| (q, y0 - q.y)).filter(|(_, d)| *d > -margin).collect()
+    points.into_iter().take(n).map(move |q| (q, y0 - q.y)).filter(move |(_, d)| *d > -margin)
 }
 
 type Contact = (usize, usize, V, V, f64);
@@ -435,7 +447,7 @@ mod tests {
             centre: V::new(0.0, 0.67, 0.0),
             rotation: UnitQuaternion::from_axis_angle(&V::z_axis(), 0.5).to_rotation_matrix().into_inner(),
         };
-        let c = on_floor(Some(Extent::Cuboid([0.5; 3])), &p, 0.0, 0.01);
+        let c: Vec<_> = on_floor(Some(Extent::Cuboid([0.5; 3])), &p, 0.0, 0.01).collect();
         let lowest = corners(&p, [0.5; 3]).iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
         assert_eq!(c.len(), 2);
         assert!(c.iter().all(|(q, d)| (q.y - lowest).abs() < 1e-12 && (*d + lowest).abs() < 1e-12));
@@ -494,7 +506,7 @@ mod tests {
             let turned = UnitQuaternion::from_axis_angle(&axis, angle);
             let at = |q: UnitQuaternion<f64>, x: f64, z: f64| {
                 let p = Pose { centre: V::new(x, y, z), rotation: q.to_rotation_matrix().into_inner() };
-                let mut d: Vec<f64> = on_floor(Some(Extent::Cuboid([0.5, 0.3, 0.2])), &p, 0.0, 0.05).iter().map(|c| c.1).collect();
+                let mut d: Vec<f64> = on_floor(Some(Extent::Cuboid([0.5, 0.3, 0.2])), &p, 0.0, 0.05).map(|c| c.1).collect();
                 d.sort_by(f64::total_cmp);
                 d
             };

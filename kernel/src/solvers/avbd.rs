@@ -46,11 +46,11 @@ use crate::state::State;
 use block::Block;
 use colours::Rows;
 use contact::{Bound, Contact};
-use islands::Island;
+use islands::{Island, Islands};
 use lagra_checker::model::Pin;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
-use warm::Warm;
+use warm::{Kept, Key, Warm};
 
 type V = Vector3<f64>;
 /// A body's move over the step: displacement, then rotation vector.
@@ -107,27 +107,33 @@ impl Solver for Avbd {
         // on a pool, the islands a task each where they share out over its threads (nothing to
         // wait for between colours); else the whole at once, each colour spread over the pool
         // (on one thread the whole too: taking the islands apart cost 10% of the stack's step)
-        let islands = g.pool().map(|pool| (pool, Island::all(&found, &self.solids.pins, bodies.len())));
+        let islands = g.pool().map(|pool| (pool, Islands::of(&found, &self.solids.pins, bodies.len())));
         if let Some((_, islands)) = &islands {
-            self.paths.last = Some((islands.len(), islands.iter().map(|i| i.bodies.len()).max().unwrap_or(0)));
+            self.paths.last = Some((islands.len(), islands.each().map(|i| i.bodies.len()).max().unwrap_or(0)));
         }
         let solved: Vec<Solved> = match islands {
             Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
                 self.paths.islands += 1;
                 spread::pass(|| {
-                    pool.install(|| islands.par_iter().map(|i| self.solve(i, &bodies, &start, false)).collect())
+                    pool.install(|| {
+                        (0..islands.len())
+                            .into_par_iter()
+                            .map(|k| self.solve(islands.get(k), &bodies, &start, false))
+                            .collect()
+                    })
                 })
             }
             _ => {
-                let whole = Island { bodies: (0..bodies.len()).collect(), touches: found, pins: self.pins() };
+                let (all, pins): (Vec<usize>, _) = ((0..bodies.len()).collect(), self.pins());
+                let whole = Island { bodies: &all, touches: &found, pins: &pins };
                 match g.pool() {
                     Some(pool) => {
                         self.paths.colours += 1;
-                        vec![pool.install(|| self.solve(&whole, &bodies, &start, true))]
+                        vec![pool.install(|| self.solve(whole, &bodies, &start, true))]
                     }
                     None => {
                         self.paths.alone += 1;
-                        vec![self.solve(&whole, &bodies, &start, false)]
+                        vec![self.solve(whole, &bodies, &start, false)]
                     }
                 }
             }
@@ -156,7 +162,13 @@ impl Solver for Avbd {
             *spin = [q.w, q.i, q.j, q.k, pi.x, pi.y, pi.z];
         }
         self.at.potential = g.forces(s, &mut self.at.f)?;
-        self.keep_warm(solved.iter().flat_map(|s| &s.contacts), &bodies, &start);
+        self.warm.clear();
+        for (key, kept) in solved.iter().flat_map(|s| &s.kept) {
+            match *key {
+                Key::Pin(j) => self.warm.keep_pin(j, *kept),
+                Key::Pair(a, b) => self.warm.keep(a, b, *kept),
+            }
+        }
         Ok(())
     }
 
@@ -211,19 +223,20 @@ impl Solver for Avbd {
     }
 }
 
-/// An island swept: its bodies' moves (by their index in the state), its contacts (their bodies
-/// numbered as in the state) with the λ and k they ended at, and what its last sweep left.
+/// An island swept: its bodies' moves (by their index in the state), what its contacts leave
+/// for the next step's warm start (their pairs numbered as in the state), and what its last
+/// sweep left.
 struct Solved {
     moves: Vec<(usize, Move)>,
-    contacts: Vec<Contact>,
+    kept: Vec<(Key, Kept)>,
     residual: f64,
 }
 
 /// Whether `threads` threads have islands enough to take one at a time: at least one each, and
 /// the largest no more than a thread's share of the bodies in islands.
-fn shares(islands: &[Island], threads: usize) -> bool {
-    let largest = islands.iter().map(|i| i.bodies.len()).max().unwrap_or(0);
-    let held: usize = islands.iter().map(|i| i.bodies.len()).sum();
+fn shares(islands: &Islands, threads: usize) -> bool {
+    let largest = islands.each().map(|i| i.bodies.len()).max().unwrap_or(0);
+    let held: usize = islands.each().map(|i| i.bodies.len()).sum();
     islands.len() >= threads && largest * threads <= held
 }
 
@@ -233,13 +246,13 @@ impl Avbd {
     /// pool if `parallel`). An island's levels and greedy colours are decided within it, so its
     /// bodies descend in the order they take in a sweep over all: the same bits whether the
     /// bodies are swept island by island or all at once.
-    fn solve(&self, island: &Island, all: &[Body], start: &[Pose], parallel: bool) -> Solved {
+    fn solve(&self, island: Island, all: &[Body], start: &[Pose], parallel: bool) -> Solved {
         let margin = self.solids.margin.max(f64::MIN_POSITIVE);
         let poses: Vec<Pose> = island.bodies.iter().map(|&i| start[i]).collect();
         let mut bodies: Vec<Body> = island.bodies.iter().map(|&i| all[i]).collect();
         let mut contacts: Vec<Contact> =
             island.touches.iter().map(|t| Contact::new(t, &poses, &bodies, margin)).collect();
-        for (j, p) in &island.pins {
+        for (j, p) in island.pins {
             let mut c = Contact::pin(*j, p, &poses, &bodies, margin);
             if let Some((_, lambda, stiffness)) = self.warm.pin(*j) {
                 c.warm_from(lambda, stiffness);
@@ -259,11 +272,10 @@ impl Avbd {
             }
         }
         let residual = sweep(&mut bodies, &mut contacts, &rows, self.sweeps, parallel);
-        for c in &mut contacts {
-            (c.a, c.b) = (c.a.map(|a| island.bodies[a]), island.bodies[c.b]);
-        }
+        // computed here, on the island's thread, so the step's serial part only files them
+        let kept = contacts.iter().map(|c| keep(c, &bodies, &poses, island.bodies)).collect();
         let moves = island.bodies.iter().zip(&bodies).map(|(&i, b)| (i, b.moved)).collect();
-        Solved { moves, contacts, residual }
+        Solved { moves, kept, residual }
     }
 
     /// The pins with their indices, for a sweep over all bodies at once.
@@ -308,22 +320,19 @@ impl Avbd {
             c.warm_from(lambda, stiffness);
         }
     }
+}
 
-    /// Each contact's λ and k, at its point carried by b's move (where the next step's search
-    /// will find it).
-    fn keep_warm<'a>(&mut self, contacts: impl Iterator<Item = &'a Contact>, bodies: &[Body], start: &[Pose]) {
-        self.warm.clear();
-        for c in contacts {
-            if let Bound::Pin(j) = c.bound {
-                self.warm.keep_pin(j, (c.point, c.lambda, c.stiffness));
-                continue;
-            }
-            let m = &bodies[c.b].moved;
-            let turn: V = m.fixed_rows::<3>(3).into_owned();
-            let place = c.point + m.fixed_rows::<3>(0) + turn.cross(&(c.point - start[c.b].centre));
-            self.warm.keep(c.a, c.b, (place, c.lambda, c.stiffness));
-        }
+/// What a contact leaves for the next step's warm start, keyed by pin, or by its pair in the
+/// state's numbering (`index`: the island's bodies): its λ and k, at its point carried by b's
+/// move (where the next step's search will find it).
+fn keep(c: &Contact, bodies: &[Body], start: &[Pose], index: &[usize]) -> (Key, Kept) {
+    if let Bound::Pin(j) = c.bound {
+        return (Key::Pin(j), (c.point, c.lambda, c.stiffness));
     }
+    let m = &bodies[c.b].moved;
+    let turn: V = m.fixed_rows::<3>(3).into_owned();
+    let place = c.point + m.fixed_rows::<3>(0) + turn.cross(&(c.point - start[c.b].centre));
+    (Key::Pair(c.a.map(|a| index[a]), index[c.b]), (place, c.lambda, c.stiffness))
 }
 
 /// `sweeps` rounds of block descent, colour by colour, each followed by the dual step; returns

@@ -6,19 +6,31 @@
 use crate::contact::Touch;
 use lagra_checker::model::Pin;
 
-/// One island: its bodies' indices in the state, in order; the touches and pins among them with
-/// their bodies renumbered into that list (in the order they were found); each pin's index in
-/// the scene (its warm start's key).
-pub struct Island {
-    pub bodies: Vec<usize>,
-    pub touches: Vec<Touch>,
-    pub pins: Vec<(usize, Pin)>,
+/// One island, borrowed: its bodies' indices in the state, in order; the touches and pins among
+/// them with their bodies renumbered into that list (in the order they were found); each pin's
+/// index in the scene (its warm start's key).
+#[derive(Clone, Copy)]
+pub struct Island<'a> {
+    pub bodies: &'a [usize],
+    pub touches: &'a [Touch],
+    pub pins: &'a [(usize, Pin)],
 }
 
-impl Island {
+/// Every island of a step, laid out flat: island k's bodies, touches and pins are the k-th runs
+/// of three lists (a counting sort), so splitting a step allocates a few lists, not three an
+/// island (the 1,000-block stack's hundred islands made that a third of its serial time).
+pub struct Islands {
+    bodies: Vec<usize>,
+    touches: Vec<Touch>,
+    pins: Vec<(usize, Pin)>,
+    /// Where island k's runs start in the three lists; one more entry, the lists' lengths.
+    starts: Vec<[usize; 3]>,
+}
+
+impl Islands {
     /// The islands of `n` bodies joined by `touches` and `pins`, ordered by their first body; a
     /// body that touches nothing is in none.
-    pub fn all(touches: &[Touch], pins: &[Pin], n: usize) -> Vec<Island> {
+    pub fn of(touches: &[Touch], pins: &[Pin], n: usize) -> Islands {
         let mut root: Vec<usize> = (0..n).collect();
         let mut joined = vec![false; n];
         let links = touches.iter().map(|t| (t.a, t.b)).chain(pins.iter().map(|p| (p.a, p.b)));
@@ -31,29 +43,70 @@ impl Island {
             }
         }
         // each island's root is its lowest body, so numbering the roots in order numbers the
-        // islands by their first body
+        // islands by their first body; `local` is a body's place within its island
         let mut island = vec![usize::MAX; n];
         let mut local = vec![0; n];
-        let mut islands: Vec<Island> = vec![];
+        let mut counts: Vec<[usize; 3]> = vec![];
         for i in (0..n).filter(|&i| joined[i]) {
             let r = find(&mut root, i);
             if r == i {
-                island[i] = islands.len();
-                islands.push(Island { bodies: vec![], touches: vec![], pins: vec![] });
+                island[i] = counts.len();
+                counts.push([0; 3]);
             }
             island[i] = island[r];
-            local[i] = islands[island[i]].bodies.len();
-            islands[island[i]].bodies.push(i);
+            local[i] = counts[island[i]][0];
+            counts[island[i]][0] += 1;
         }
-        for t in touches {
-            let (a, b) = (t.a.map(|a| local[a]), local[t.b]);
-            islands[island[t.b]].touches.push(Touch { a, b, ..*t });
+        touches.iter().for_each(|t| counts[island[t.b]][1] += 1);
+        pins.iter().for_each(|p| counts[island[p.b]][2] += 1);
+        let mut starts = Vec::with_capacity(counts.len() + 1);
+        let mut at = [0; 3];
+        for c in &counts {
+            starts.push(at);
+            at = std::array::from_fn(|k| at[k] + c[k]);
         }
+        starts.push(at);
+        // where each touch and pin goes: the next free place of its island's run, so each
+        // island's keep the order they were found in; `from[d]` is what lands at place d
+        let mut next: Vec<[usize; 3]> = starts.clone();
+        let mut bodies = vec![0; at[0]];
+        for i in (0..n).filter(|&i| joined[i]) {
+            bodies[starts[island[i]][0] + local[i]] = i;
+        }
+        let mut from = vec![0; at[1]];
+        for (s, t) in touches.iter().enumerate() {
+            let k = island[t.b];
+            from[next[k][1]] = s;
+            next[k][1] += 1;
+        }
+        let touches = from
+            .iter()
+            .map(|&s| Touch { a: touches[s].a.map(|a| local[a]), b: local[touches[s].b], ..touches[s] })
+            .collect();
+        let mut from = vec![0; at[2]];
         for (j, p) in pins.iter().enumerate() {
-            let (a, b) = (p.a.map(|a| local[a]), local[p.b]);
-            islands[island[p.b]].pins.push((j, Pin { a, b, ..*p }));
+            let k = island[p.b];
+            from[next[k][2]] = j;
+            next[k][2] += 1;
         }
-        islands
+        let pins =
+            from.iter().map(|&j| (j, Pin { a: pins[j].a.map(|a| local[a]), b: local[pins[j].b], ..pins[j] })).collect();
+        Islands { bodies, touches, pins, starts }
+    }
+
+    pub fn len(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// Island k.
+    pub fn get(&self, k: usize) -> Island<'_> {
+        let ([b0, t0, p0], [b1, t1, p1]) = (self.starts[k], self.starts[k + 1]);
+        Island { bodies: &self.bodies[b0..b1], touches: &self.touches[t0..t1], pins: &self.pins[p0..p1] }
+    }
+
+    /// The islands in order.
+    pub fn each(&self) -> impl ExactSizeIterator<Item = Island<'_>> {
+        (0..self.len()).map(|k| self.get(k))
     }
 }
 
@@ -81,8 +134,9 @@ mod tests {
     fn contacts_and_pins_between_bodies_join_islands_and_the_floor_does_not() {
         let touches = [touch(None, 0), touch(None, 1), touch(Some(1), 3), touch(Some(0), 2)];
         let pins = [Pin { a: Some(4), b: 5, on_a: [0.0; 3], on_b: [0.0; 3] }];
-        let islands = Island::all(&touches, &pins, 7);
-        let bodies: Vec<_> = islands.iter().map(|i| i.bodies.clone()).collect();
+        let islands = Islands::of(&touches, &pins, 7);
+        let islands: Vec<Island> = islands.each().collect();
+        let bodies: Vec<_> = islands.iter().map(|i| i.bodies.to_vec()).collect();
         assert_eq!(bodies, vec![vec![0, 2], vec![1, 3], vec![4, 5]]);
         let pairs = |i: &Island| i.touches.iter().map(|t| (t.a, t.b)).collect::<Vec<_>>();
         assert_eq!(pairs(&islands[0]), vec![(None, 0), (Some(0), 1)]);
@@ -95,8 +149,9 @@ mod tests {
     #[test]
     fn a_chain_found_out_of_order_is_one_island() {
         let touches = [touch(Some(1), 3), touch(None, 0), touch(Some(1), 2)];
-        let islands = Island::all(&touches, &[], 4);
-        let bodies: Vec<_> = islands.iter().map(|i| i.bodies.clone()).collect();
+        let islands = Islands::of(&touches, &[], 4);
+        let islands: Vec<Island> = islands.each().collect();
+        let bodies: Vec<_> = islands.iter().map(|i| i.bodies.to_vec()).collect();
         assert_eq!(bodies, vec![vec![0], vec![1, 2, 3]]);
         let pairs: Vec<_> = islands[1].touches.iter().map(|t| (t.a, t.b)).collect();
         assert_eq!(pairs, vec![(Some(0), 2), (Some(0), 1)]);

@@ -9,6 +9,13 @@ use nalgebra::Vector3;
 /// A contact's place (where the next step's search will find it), λ and k of its three rows.
 pub(super) type Kept = (Vector3<f64>, [f64; 3], [f64; 3]);
 
+/// Whose a kept contact is: pin j's, or a contact's between a (none: the floor) and b.
+#[derive(Clone, Copy)]
+pub(super) enum Key {
+    Pin(usize),
+    Pair(Option<usize>, usize),
+}
+
 /// The carried form: each pair (a, b) with its contacts, the floor's a being `usize::MAX` and
 /// pin j's pair (j, `usize::MAX`), which no contact's can be (b is a body).
 pub(super) type Pairs = Vec<((usize, usize), Vec<Kept>)>;
