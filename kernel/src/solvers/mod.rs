@@ -269,7 +269,12 @@ impl Stepper {
     /// counter is then at the step before); the potential energy is that of the state reached.
     pub fn advance_to(&mut self, g: &LagrangianGraph, s: &mut State, dt: f64, until: u64) -> Result<(), Failure> {
         let from = s.step;
-        let done = self.solver.advance_to(g, s, dt, until);
+        // on a pool, the steps go to it whole: its passes then wake no one from outside
+        let solver = &mut self.solver;
+        let done = match g.pool() {
+            Some(pool) => crate::spread::within(pool, || solver.advance_to(g, s, dt, until)),
+            None => solver.advance_to(g, s, dt, until),
+        };
         // the rigid bodies turn through the steps taken, failed or not (`LagrangianGraph::turn`)
         if !self.solver.rotates() {
             g.turn(&mut s.spin, dt, s.step - from);
