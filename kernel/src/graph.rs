@@ -10,6 +10,8 @@ use crate::constraints::{Constraints, Swept, Tolerance, Unconverged};
 use crate::contact::Solids;
 use crate::forces::derivative::{Adjoint, Direction, Wanted};
 use crate::forces::{group, Force, Frame, Kept, Parts, Pool, Singularity};
+use crate::neighbours::LANES;
+use crate::pieces::PIECE_CLUSTERS;
 use crate::rigid::{self, Spin};
 use crate::spread::SPREAD_FROM;
 use crate::state::State;
@@ -214,6 +216,14 @@ impl LagrangianGraph {
         self.pool.as_deref().filter(|_| self.masses.len() >= SPREAD_FROM)
     }
 
+    /// Whether a step of this graph spreads over its pool: at this size a pass over the bodies
+    /// does, or the pair list is cut into pieces enough to share (`Pieces::count_for`). If not,
+    /// sending its steps to the pool whole only wakes it (Kepler, checked every step, took 2.0 s
+    /// on two threads that way against 0.9 s on the run's thread).
+    pub fn steps_spread(&self) -> bool {
+        self.pool.is_some() && self.masses.len() >= (2 * PIECE_CLUSTERS * LANES).min(SPREAD_FROM)
+    }
+
     /// The run's threads, if it has more than one (for a pass that spreads at any size).
     pub fn pool(&self) -> Option<&rayon::ThreadPool> {
         self.pool.as_deref()
@@ -357,17 +367,32 @@ mod tests {
 
     /// 5,324 Lennard-Jones atoms (enough to split the pair list into chunks), a few steps into a
     /// melt so that the list is stale and images cross the box.
+    /// An LJ liquid of `cells`³ fcc cells.
+    fn liquid(cells: usize) -> lagra_lang::Scene {
+        let text = format!(
+            "scene m {{ entity atom {{ mass: 1 }}
+               lattice {{ type: atom, density: 0.8442, cells: [{cells}, {cells}, {cells}], temperature: 3.0, seed: 9 }}
+               interaction lj_shifted {{ epsilon: 1, sigma: 1, cutoff: 2.5 }}
+               solver {{ dt: 0.005, steps: 1 }} }}"
+        );
+        compile(&text).unwrap()
+    }
+
     fn melt() -> (Model, State) {
-        let scene = compile(
-            "scene m { entity atom { mass: 1 }
-               lattice { type: atom, density: 0.8442, cells: [11, 11, 11], temperature: 3.0, seed: 9 }
-               interaction lj_shifted { epsilon: 1, sigma: 1, cutoff: 2.5 }
-               solver { dt: 0.005, steps: 1 } }",
-        )
-        .unwrap();
+        let scene = liquid(11);
         let mut s = crate::setup::start(&scene);
         s.x.iter_mut().zip(&s.v).for_each(|(x, v)| (0..3).for_each(|c| x[c] += 0.02 * v[c] - 40.0));
         (scene.model, s)
+    }
+
+    /// A step spreads where its pair list is cut into pieces (5,324 atoms), not on a handful of
+    /// atoms, and never without a pool.
+    #[test]
+    fn steps_spread_where_the_pairs_are_cut_into_pieces() {
+        let (model, _) = melt();
+        assert!(LagrangianGraph::with_threads(&model, 2).unwrap().steps_spread());
+        assert!(!LagrangianGraph::with_threads(&model, 1).unwrap().steps_spread());
+        assert!(!LagrangianGraph::with_threads(&liquid(3).model, 2).unwrap().steps_spread());
     }
 
     /// Bodies ordered along x, the last third ghosts: the pairs among them are left out, the

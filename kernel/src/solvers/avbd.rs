@@ -172,6 +172,11 @@ impl Solver for Avbd {
         Ok(())
     }
 
+    /// Its contact search spreads over the pool at any size.
+    fn spreads(&self, g: &LagrangianGraph) -> bool {
+        g.pool().is_some()
+    }
+
     fn evaluated(&self) -> &Evaluated {
         &self.at
     }

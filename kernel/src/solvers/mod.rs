@@ -148,6 +148,10 @@ pub trait Solver {
         }
         Ok(())
     }
+    /// Whether its steps spread over the graph's pool (then they go to the pool whole).
+    fn spreads(&self, g: &LagrangianGraph) -> bool {
+        g.steps_spread()
+    }
     /// How the iterations inside its steps went, for a solver that iterates.
     fn iterations(&self) -> Option<&Iterations> {
         None
@@ -271,7 +275,7 @@ impl Stepper {
         let from = s.step;
         // on a pool, the steps go to it whole: its passes then wake no one from outside
         let solver = &mut self.solver;
-        let done = match g.pool() {
+        let done = match g.pool().filter(|_| solver.spreads(g)) {
             Some(pool) => crate::spread::within(pool, || solver.advance_to(g, s, dt, until)),
             None => solver.advance_to(g, s, dt, until),
         };
