@@ -11,11 +11,15 @@
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::cell::Cell;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 thread_local! {
     static SPREAD: Cell<Duration> = const { Cell::new(Duration::ZERO) };
     static DEPTH: Cell<u32> = const { Cell::new(0) };
+    /// Whether this thread is polling the pool for work ([`awake`]).
+    static POLLING: Cell<bool> = const { Cell::new(false) };
 }
 
 /// Bodies a thread takes at once in a spread pass over them.
@@ -80,12 +84,71 @@ pub fn within<R: Send>(pool: &ThreadPool, work: impl FnOnce() -> R + Send) -> R 
     let (done, spread) = pool.install(|| {
         let inner = DEPTH.with(|d| d.replace(outer));
         let before = spent();
-        let done = work();
+        let done = awake(work);
         DEPTH.with(|d| d.set(inner));
         (done, spent() - before)
     });
     SPREAD.with(|s| s.set(s.get() + spread));
     done
+}
+
+/// How long a pool's thread kept awake by [`awake`] polls without finding work before it goes
+/// back to the pool's own idling (and, soon after, to sleep). The stack's serial gaps between
+/// passes are a few hundred microseconds; a checkpoint's ends every `within`.
+const POLL_IDLE: Duration = Duration::from_millis(2);
+
+/// `work()` on this pool thread, the pool's other threads kept awake meanwhile, each polling
+/// the pool for work (`rayon::yield_now`) until `work` returns. A pool's idle thread yields a
+/// few dozen times and then sleeps; waking it for the next pass took 100–300 µs on a 2-vCPU
+/// virtual machine (the hypervisor deschedules a halted vCPU), half of the stack's 0.6 ms
+/// broad-phase pass. OpenMP runtimes spin between parallel regions for the same reason
+/// (`OMP_WAIT_POLICY=active`). Only as many threads poll as there are CPUs besides this one
+/// (an oversubscribed pool's pollers would take the CPU from the work), and a poller that finds
+/// nothing for `POLL_IDLE` stops, so a panic in `work` or a long serial part costs no more.
+fn awake<R: Send>(work: impl FnOnce() -> R + Send) -> R {
+    awake_with(rayon::current_num_threads().min(cpus()).saturating_sub(1), work)
+}
+
+/// [`awake`] with `pollers` threads polling.
+fn awake_with<R: Send>(pollers: usize, work: impl FnOnce() -> R + Send) -> R {
+    if pollers == 0 {
+        return work();
+    }
+    let (owner, done) = (rayon::current_thread_index(), AtomicBool::new(false));
+    rayon::scope(|s| {
+        for _ in 0..pollers {
+            s.spawn(|_| poll(&done, owner));
+        }
+        let r = work();
+        done.store(true, Ordering::Release);
+        r
+    })
+}
+
+/// Runs the pool's pending work on this thread until `done`, or until there has been none for
+/// `POLL_IDLE`. A poller that lands on the owner's thread (taken from its own queue while it
+/// waits in a pass), or inside another poller's job on this thread, returns at once: one that
+/// polled there would hold up the work it is nested in until it found nothing for `POLL_IDLE`
+/// (never longer: the bound, not this check, is what rules out a hang).
+fn poll(done: &AtomicBool, owner: Option<usize>) {
+    if rayon::current_thread_index() == owner || POLLING.with(|p| p.replace(true)) {
+        return;
+    }
+    let mut found = Instant::now();
+    while !done.load(Ordering::Acquire) {
+        match rayon::yield_now() {
+            Some(rayon::Yield::Executed) => found = Instant::now(),
+            _ if found.elapsed() > POLL_IDLE => break,
+            _ => std::thread::yield_now(),
+        }
+    }
+    POLLING.with(|p| p.set(false));
+}
+
+/// The CPUs this process may run on (read once).
+fn cpus() -> usize {
+    static CPUS: OnceLock<usize> = OnceLock::new();
+    *CPUS.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// This thread's time in passes so far (a run reads it before and after).
@@ -161,6 +224,29 @@ mod tests {
         let (before, around) = (spent(), Instant::now());
         pass(|| within(&pool, || pass(nap)));
         assert!(spent() - before <= around.elapsed());
+    }
+
+    /// Every thread but one polling, nested passes on an oversubscribed pool (so pollers land
+    /// on the owner's thread and inside one another's jobs): the same sums, and no hang.
+    #[test]
+    fn work_kept_awake_gets_its_answer_and_ends() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(8).build().unwrap();
+        let nested = |i: u64| (0..i % 50).into_par_iter().map(|k| k * k).sum::<u64>();
+        let want: u64 = (0..2000).map(nested).sum();
+        for _ in 0..20 {
+            let got = pool.install(|| awake_with(7, || (0..2000u64).into_par_iter().map(nested).sum::<u64>()));
+            assert_eq!(got, want);
+        }
+    }
+
+    #[test]
+    fn a_panic_in_work_kept_awake_is_passed_on() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| awake_with(1, || panic!("in the work")))
+        }));
+        assert!(caught.is_err());
+        assert_eq!(pool.install(|| awake_with(1, || 7)), 7, "the pool still works");
     }
 
     #[test]
