@@ -53,9 +53,10 @@ impl<'a> Grid<'a> {
         grid
     }
 
-    /// The solids numbered after `i` (of ball radius `r`) whose balls meet its, in order.
-    pub fn after(&self, i: usize, r: f64) -> Vec<usize> {
-        let mut found = vec![];
+    /// The solids numbered after `i` (of ball radius `r`) whose balls meet its, in order, in
+    /// `found` (emptied first: a search reuses one list).
+    pub fn after<'f>(&self, i: usize, r: f64, found: &'f mut Vec<usize>) -> &'f [usize] {
+        found.clear();
         let k = self.at(i);
         let around = |k: usize, d: usize| k.saturating_sub(1)..(k + 2).min(d);
         for x in around(k[0], self.dims.x) {

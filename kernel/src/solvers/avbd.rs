@@ -114,14 +114,7 @@ impl Solver for Avbd {
         let solved: Vec<Solved> = match islands {
             Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
                 self.paths.islands += 1;
-                spread::pass(|| {
-                    pool.install(|| {
-                        (0..islands.len())
-                            .into_par_iter()
-                            .map(|k| self.solve(islands.get(k), &bodies, &start, false))
-                            .collect()
-                    })
-                })
+                spread::share(Some(pool), islands.len(), 1, |k| self.solve(islands.get(k), &bodies, &start, false))
             }
             _ => {
                 let (all, pins): (Vec<usize>, _) = ((0..bodies.len()).collect(), self.pins());
