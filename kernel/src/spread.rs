@@ -81,7 +81,7 @@ pub fn share<U: Send>(pool: Option<&ThreadPool>, n: usize, chunk: usize, f: impl
 
 /// [`share`] on the current pool.
 fn shared<U: Send>(n: usize, chunk: usize, f: &(impl Fn(usize) -> U + Sync)) -> Vec<U> {
-    let helpers = rayon::current_num_threads().min(cpus()).min(n.div_ceil(chunk)).saturating_sub(1);
+    let helpers = others().min(n.div_ceil(chunk).saturating_sub(1));
     let (next, done, broken) = (AtomicUsize::new(0), AtomicUsize::new(0), AtomicBool::new(false));
     let found: Mutex<Vec<(usize, Vec<U>)>> = Mutex::new(vec![]);
     let take = || {
@@ -172,7 +172,7 @@ const POLL_IDLE: Duration = Duration::from_millis(2);
 /// (an oversubscribed pool's pollers would take the CPU from the work), and a poller that finds
 /// nothing for `POLL_IDLE` stops, so a panic in `work` or a long serial part costs no more.
 fn awake<R: Send>(work: impl FnOnce() -> R + Send) -> R {
-    awake_with(rayon::current_num_threads().min(cpus()).saturating_sub(1), work)
+    awake_with(others(), work)
 }
 
 /// [`awake`] with `pollers` threads polling.
@@ -209,6 +209,12 @@ fn poll(done: &AtomicBool, owner: Option<usize>) {
         }
     }
     POLLING.with(|p| p.set(false));
+}
+
+/// The current pool's threads besides this one that have a CPU of their own to run on (more
+/// would only take the CPU from the work).
+fn others() -> usize {
+    rayon::current_num_threads().min(cpus()).saturating_sub(1)
 }
 
 /// The CPUs this process may run on (read once).
