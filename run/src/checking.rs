@@ -13,9 +13,12 @@ use lagra_kernel::state::State;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 
-/// From this many bodies a checkpoint costs enough (an interval sum over every pair) to be worth
-/// a thread; below it the hand-over would cost more than the checking.
-const OVERLAP_FROM: usize = 1024;
+/// From this many bodies a checkpoint costs enough to be worth a thread: judging takes 4–6 µs a
+/// body (lj_liquid's 256 atoms 1.3 ms, lj_nvt's 500 2.0 ms, stack_1000's solids 5.5 ms), so
+/// about 2.5 ms here, where the hand-over (a copy of the state, a wake) was not seen on one CPU
+/// against the run's noise. From 1,024 before: the stack's 1,000 blocks then waited for every
+/// checkpoint, 3% of its two-thread step.
+const OVERLAP_FROM: usize = 512;
 
 /// Whether a run may check on a second thread: a big scene whose checker looks only at its
 /// checkpoints (an energy balance integrates over every step), and nothing else that sees the
@@ -215,11 +218,44 @@ mod tests {
     fn same(a: &Report, b: &Report) {
         assert_eq!((a.steps, &a.stop), (b.steps, &b.stop));
         assert_eq!(a.state.step, b.state.step);
-        let bits = |r: &Report| r.state.x.iter().chain(&r.state.v).flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+        let bits = |r: &Report| {
+            let (x, v, spin) = (&r.state.x, &r.state.v, &r.state.spin);
+            x.iter().chain(v).flatten().chain(spin.iter().flatten()).map(|c| c.to_bits()).collect::<Vec<_>>()
+        };
         assert!(bits(a) == bits(b));
         assert_eq!(format!("{:?}", a.outcome.verdicts), format!("{:?}", b.outcome.verdicts));
         let trails = |r: &Report| serde_json::to_string(&r.outcome.trails).unwrap();
         assert_eq!(trails(a), trails(b));
+    }
+
+    /// `n` unit blocks in towers of eight, a hair apart, on a floor; no overlap checked every 5 of
+    /// 20 steps.
+    fn towers(n: usize) -> lagra_lang::scene::Scene {
+        let blocks: String = (0..n)
+            .map(|i| {
+                let (t, level) = (i / 8, i % 8);
+                let (x, y, z) = ((t % 8) as f64 * 1.5, 0.5 + level as f64 * 1.001, (t / 8) as f64 * 1.5);
+                format!("entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [{x}, {y}, {z}] }}\n")
+            })
+            .collect();
+        compile(&format!(
+            "scene towers {{ uses newtonian.rigid_bodies
+               {blocks} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }}
+               @expect no_penetration {{ tol: 1e-3, every: 5 }}
+               solver {{ dt: 0.005, steps: 20 }} }}"
+        ))
+        .unwrap()
+    }
+
+    /// Solids count as atoms do: from 512 blocks a run checks alongside the kernel and ends as
+    /// the inline run does, orientations included, bit for bit; 511 check inline.
+    #[test]
+    fn from_512_blocks_a_stack_is_checked_alongside() {
+        let (a, b) = both(&towers(512));
+        assert!(a.stop.is_none() && a.steps == 20, "{:?}", a.stop);
+        same(&a, &b);
+        let r = run(&towers(511), Options::plain(None)).unwrap();
+        assert!(r.checker.starts_with("inline"), "{}", r.checker);
     }
 
     #[test]
