@@ -17,7 +17,7 @@ use std::thread::{Scope, ScopedJoinHandle};
 /// body (lj_liquid's 256 atoms 1.3 ms, lj_nvt's 500 2.0 ms, stack_1000's solids 5.5 ms), so
 /// about 2.5 ms here, where the hand-over (a copy of the state, a wake) was not seen on one CPU
 /// against the run's noise. From 1,024 before: the stack's 1,000 blocks then waited for every
-/// checkpoint, 3% of its two-thread step.
+/// checkpoint, 2.5% of its two-thread run.
 const OVERLAP_FROM: usize = 512;
 
 /// Whether a run may check on a second thread: a big scene whose checker looks only at its
