@@ -194,7 +194,9 @@ fn explain_says_how_avbd_shared_out_its_islands() {
     assert!(plan(&towers, "1").ends_with("the whole on one thread in 10 step(s)"));
     let whole = plan(&pyramid, "2");
     assert!(
-        whole.contains("the whole, each colour spread over the pool") && whole.contains("the largest of 15 bodies"),
+        whole.contains("the whole, colour by colour")
+            && whole.contains("; 0 of its colour passes spread over the pool (those of 64 bodies or more)")
+            && whole.contains("the largest of 15 bodies"),
         "{whole}"
     );
 }

@@ -50,6 +50,7 @@ use islands::{Island, Islands};
 use lagra_checker::model::Pin;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
+use rayon::ThreadPool;
 use warm::{Kept, Key, Warm};
 
 type V = Vector3<f64>;
@@ -74,6 +75,8 @@ pub struct Avbd {
 struct Paths {
     islands: u64,
     colours: u64,
+    /// Colour passes that spread over the pool (`SPREAD_FROM` bodies or more).
+    spread: u64,
     alone: u64,
     last: Option<(usize, usize)>,
 }
@@ -114,7 +117,7 @@ impl Solver for Avbd {
         let solved: Vec<Solved> = match islands {
             Some((pool, islands)) if shares(&islands, pool.current_num_threads()) => {
                 self.paths.islands += 1;
-                spread::share(Some(pool), islands.len(), 1, |k| self.solve(islands.get(k), &bodies, &start, false))
+                spread::share(Some(pool), islands.len(), 1, |k| self.solve(islands.get(k), &bodies, &start, None))
             }
             _ => {
                 let (all, pins): (Vec<usize>, _) = ((0..bodies.len()).collect(), self.pins());
@@ -122,11 +125,11 @@ impl Solver for Avbd {
                 match g.pool() {
                     Some(pool) => {
                         self.paths.colours += 1;
-                        vec![pool.install(|| self.solve(whole, &bodies, &start, true))]
+                        vec![pool.install(|| self.solve(whole, &bodies, &start, Some(pool)))]
                     }
                     None => {
                         self.paths.alone += 1;
-                        vec![self.solve(whole, &bodies, &start, false)]
+                        vec![self.solve(whole, &bodies, &start, None)]
                     }
                 }
             }
@@ -139,6 +142,7 @@ impl Solver for Avbd {
             bodies[*i].moved = *m;
         }
         let residual = solved.iter().fold(0.0, |r: f64, s| r.max(s.residual));
+        self.paths.spread += solved.iter().map(|s| s.spread).sum::<u64>();
         self.iterations.record(self.sweeps, residual);
         for ((b, p), (x, v)) in bodies.iter().zip(&start).zip(s.x.iter_mut().zip(s.v.iter_mut())) {
             let shift = b.moved.fixed_rows::<3>(0).into_owned();
@@ -206,10 +210,7 @@ impl Solver for Avbd {
         let p = &self.paths;
         let ways = [
             (p.islands, "island by island, a task each on the pool"),
-            (
-                p.colours,
-                "the whole, each colour spread over the pool (too few islands, or one too large, to share out)",
-            ),
+            (p.colours, "the whole, colour by colour (too few islands, or one too large, to share out)"),
             (p.alone, "the whole on one thread"),
         ];
         let said: Vec<String> =
@@ -217,7 +218,14 @@ impl Solver for Avbd {
         let last = p
             .last
             .map_or(String::new(), |(n, most)| format!("; the last step {n} island(s), the largest of {most} bodies"));
-        (!said.is_empty()).then(|| format!("AVBD swept {}{last}", said.join(", ")))
+        let spread = match p.colours {
+            0 => String::new(),
+            _ => format!(
+                "; {} of its colour passes spread over the pool (those of {SPREAD_FROM} bodies or more)",
+                p.spread
+            ),
+        };
+        (!said.is_empty()).then(|| format!("AVBD swept {}{spread}{last}", said.join(", ")))
     }
 }
 
@@ -228,6 +236,8 @@ struct Solved {
     moves: Vec<(usize, Move)>,
     kept: Vec<(Key, Kept)>,
     residual: f64,
+    /// Its colour passes that spread over the pool.
+    spread: u64,
 }
 
 /// Whether `threads` threads have islands enough to take one at a time: at least one each, and
@@ -241,10 +251,10 @@ fn shares(islands: &Islands, threads: usize) -> bool {
 impl Avbd {
     /// One island's step: its contacts' rows at the step's start (warm-started from last step's
     /// by their pair in the state), its colours, its sweeps (each colour spread over the current
-    /// pool if `parallel`). An island's levels and greedy colours are decided within it, so its
+    /// `pool`, where it is large enough to pay). An island's levels and greedy colours are decided within it, so its
     /// bodies descend in the order they take in a sweep over all: the same bits whether the
     /// bodies are swept island by island or all at once.
-    fn solve(&self, island: Island, all: &[Body], start: &[Pose], parallel: bool) -> Solved {
+    fn solve(&self, island: Island, all: &[Body], start: &[Pose], pool: Option<&ThreadPool>) -> Solved {
         let margin = self.solids.margin.max(f64::MIN_POSITIVE);
         let poses: Vec<Pose> = island.bodies.iter().map(|&i| start[i]).collect();
         let mut bodies: Vec<Body> = island.bodies.iter().map(|&i| all[i]).collect();
@@ -269,11 +279,11 @@ impl Avbd {
                 b.moved = b.target;
             }
         }
-        let residual = sweep(&mut bodies, &mut contacts, &rows, self.sweeps, parallel);
+        let (residual, spread) = sweep(&mut bodies, &mut contacts, &rows, self.sweeps, pool);
         // computed here, on the island's thread, so the step's serial part only files them
         let kept = contacts.iter().map(|c| keep(c, &bodies, &poses, island.bodies)).collect();
         let moves = island.bodies.iter().zip(&bodies).map(|(&i, b)| (i, b.moved)).collect();
-        Solved { moves, kept, residual }
+        Solved { moves, kept, residual, spread }
     }
 
     /// The pins with their indices, for a sweep over all bodies at once.
@@ -333,37 +343,57 @@ fn keep(c: &Contact, bodies: &[Body], start: &[Pose], index: &[usize]) -> (Key, 
     (Key::Pair(c.a.map(|a| index[a]), index[c.b]), (place, c.lambda, c.stiffness))
 }
 
-/// `sweeps` rounds of block descent, colour by colour, each followed by the dual step; returns
-/// the overlap left beyond the target after the last.
-fn sweep(bodies: &mut [Body], contacts: &mut [Contact], rows: &Rows, sweeps: u32, parallel: bool) -> f64 {
-    let mut residual = 0.0;
+/// Bodies in a colour (or contacts in an island) from which a sweep's pass over them spreads
+/// over the pool, a thread taking `PIECE` at once. A body's descent takes ~0.4 µs (the stack's
+/// sweeps, one thread), so a smaller colour is under ~25 µs of work, where a pass's hand-over
+/// costs a few (a pyramid's colours are a few bricks each).
+const SPREAD_FROM: usize = 64;
+const PIECE: usize = 16;
+
+/// `sweeps` rounds of block descent, colour by colour, each followed by the dual step, each
+/// pass large enough spread over `pool`; returns the overlap left beyond the target after the
+/// last, and the colour passes that spread.
+fn sweep(
+    bodies: &mut [Body],
+    contacts: &mut [Contact],
+    rows: &Rows,
+    sweeps: u32,
+    pool: Option<&ThreadPool>,
+) -> (f64, u64) {
+    let (mut residual, mut spread) = (0.0, 0);
     for _ in 0..sweeps {
         for colour in &rows.colours {
             // a colour's bodies share no row, so each one's move is the same taken in place
             // or from the moves as the colour began
-            if parallel {
-                let frozen = &*bodies;
-                let moved: Vec<Move> = spread::pass(|| {
-                    colour.par_iter().map(|&i| descend(&frozen[i], frozen, contacts, &rows.of[i])).collect()
-                });
-                for (&i, m) in colour.iter().zip(moved) {
-                    bodies[i].moved = m;
+            match pool.filter(|_| colour.len() >= SPREAD_FROM) {
+                Some(pool) => {
+                    spread += 1;
+                    let frozen = &*bodies;
+                    let moved = spread::share(Some(pool), colour.len(), PIECE, |k| {
+                        let i = colour[k];
+                        descend(&frozen[i], frozen, contacts, &rows.of[i])
+                    });
+                    for (&i, m) in colour.iter().zip(moved) {
+                        bodies[i].moved = m;
+                    }
                 }
-            } else {
-                spread::pass(|| {
+                None => spread::pass(|| {
                     for &i in colour {
                         bodies[i].moved = descend(&bodies[i], bodies, contacts, &rows.of[i]);
                     }
-                });
+                }),
             }
         }
+        // the largest overlap is the same taken in any order
         let frozen = &*bodies;
-        residual = spread::pass(|| match parallel {
-            true => contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max),
-            false => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
+        residual = spread::pass(|| match pool.filter(|_| contacts.len() >= SPREAD_FROM) {
+            Some(pool) => pool.install(|| {
+                contacts.par_iter_mut().with_min_len(PIECE).map(|c| c.update(frozen)).reduce(|| 0.0, f64::max)
+            }),
+            None => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
         });
     }
-    residual
+    (residual, spread)
 }
 
 /// A body's Newton step on its share of the energy, the others' moves held: the inertial term

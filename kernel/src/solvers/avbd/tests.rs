@@ -106,6 +106,40 @@ fn a_stack_gives_the_same_bits_on_any_number_of_threads() {
     assert_eq!(one, end(7));
 }
 
+/// One island too large for the islands to share out: its colours (a layer's checkerboard, 72
+/// bricks each, over `SPREAD_FROM`) spread over the pool, shared by a counter, and the dual
+/// step too; the same bits on 1 (none spread), 2 and 7 threads.
+#[test]
+fn a_pile_of_one_island_gives_the_same_bits_on_any_number_of_threads() {
+    let bricks: String = (0..288)
+        .map(|n| {
+            let (x, y, z) = ((n % 12) as f64 * 1.0005, (n / 144) as f64 * 1.0005 + 0.5, (n / 12 % 12) as f64 * 1.0005);
+            format!("entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [{x}, {y}, {z}] }}\n")
+        })
+        .collect();
+    let scene = compile(&format!(
+        "scene s {{ {bricks} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }} solver {{ integrator: \"avbd\", dt: 0.005 }} }}"
+    ))
+    .unwrap();
+    let end = |threads: usize| {
+        let g = LagrangianGraph::with_threads(&scene.model, threads).unwrap();
+        let mut s = start(&scene);
+        let mut st = Stepper::new(scene.solver.integrator, scene.solver.settings, &g, &s).unwrap();
+        st.advance_to(&g, &mut s, 0.005, 10).unwrap();
+        let plan = st.plan().unwrap_or_default();
+        (s, plan)
+    };
+    let (one, _) = end(1);
+    assert!(one.v.iter().flatten().any(|v| *v != 0.0));
+    for threads in [2, 7] {
+        let (s, plan) = end(threads);
+        // 10 steps of 10 sweeps (the default), two layers of two colours each: 400 passes
+        assert!(plan.contains("; 400 of its colour passes spread over the pool"), "{plan}");
+        assert!(plan.contains("largest of 288"), "{plan}");
+        assert_eq!(one, s, "{threads} threads");
+    }
+}
+
 /// A brick hung from a world hinge at its end, let go 10° from the vertical, swings with the
 /// physical pendulum's period 2π√(I_pivot/(m g d)) (to 1%: the amplitude's own correction is
 /// 0.2%, implicit Euler's at ω dt = 4e-3 far less), its hinge shut to 1e-3 throughout.
