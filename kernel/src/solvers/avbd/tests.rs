@@ -89,21 +89,25 @@ fn a_stack_gives_the_same_bits_on_any_number_of_threads() {
             format!("entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [{x}, {y}, 0.0{n}], orientation: {{ axis: [0, 1, 0], angle: {n} deg }} }}\n")
         })
         .collect();
-    let scene = compile(&format!(
-        "scene s {{ {boxes} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }} solver {{ integrator: \"avbd\", dt: 0.005 }} }}"
-    ))
-    .unwrap();
-    let end = |threads: usize| {
-        let g = LagrangianGraph::with_threads(&scene.model, threads).unwrap();
-        let mut s = start(&scene);
-        let mut st = Stepper::new(scene.solver.integrator, scene.solver.settings, &g, &s).unwrap();
-        st.advance_to(&g, &mut s, 0.005, 60).unwrap();
-        s
-    };
+    let end = |threads: usize| on_the_floor(&boxes, threads, 60).0;
     let one = end(1);
     assert!(one.v.iter().flatten().any(|v| *v != 0.0));
     assert_eq!(one, end(2));
     assert_eq!(one, end(7));
+}
+
+/// `solids` under gravity on a floor after `steps` AVBD steps of 5 ms on `threads` threads,
+/// and the solver's plan.
+fn on_the_floor(solids: &str, threads: usize, steps: u64) -> (State, String) {
+    let scene = compile(&format!(
+        "scene s {{ {solids} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }} solver {{ integrator: \"avbd\", dt: 0.005 }} }}"
+    ))
+    .unwrap();
+    let g = LagrangianGraph::with_threads(&scene.model, threads).unwrap();
+    let mut s = start(&scene);
+    let mut st = Stepper::new(scene.solver.integrator, scene.solver.settings, &g, &s).unwrap();
+    st.advance_to(&g, &mut s, 0.005, steps).unwrap();
+    (s, st.plan().unwrap_or_default())
 }
 
 /// One island too large for the islands to share out: its colours (a layer's checkerboard, 72
@@ -117,22 +121,10 @@ fn a_pile_of_one_island_gives_the_same_bits_on_any_number_of_threads() {
             format!("entity {{ shape: box, size: [1, 1, 1], mass: 1, position: [{x}, {y}, {z}] }}\n")
         })
         .collect();
-    let scene = compile(&format!(
-        "scene s {{ {bricks} gravity {{ g: [0, -9.81, 0] }} floor {{ y: 0, friction: 0.6 }} solver {{ integrator: \"avbd\", dt: 0.005 }} }}"
-    ))
-    .unwrap();
-    let end = |threads: usize| {
-        let g = LagrangianGraph::with_threads(&scene.model, threads).unwrap();
-        let mut s = start(&scene);
-        let mut st = Stepper::new(scene.solver.integrator, scene.solver.settings, &g, &s).unwrap();
-        st.advance_to(&g, &mut s, 0.005, 10).unwrap();
-        let plan = st.plan().unwrap_or_default();
-        (s, plan)
-    };
-    let (one, _) = end(1);
+    let (one, _) = on_the_floor(&bricks, 1, 10);
     assert!(one.v.iter().flatten().any(|v| *v != 0.0));
     for threads in [2, 7] {
-        let (s, plan) = end(threads);
+        let (s, plan) = on_the_floor(&bricks, threads, 10);
         // 10 steps of 10 sweeps (the default), two layers of two colours each: 400 passes
         assert!(plan.contains("; 400 of its colour passes spread over the pool"), "{plan}");
         assert!(plan.contains("largest of 288"), "{plan}");
