@@ -344,11 +344,11 @@ fn keep(c: &Contact, bodies: &[Body], start: &[Pose], index: &[usize]) -> (Key, 
 }
 
 /// Bodies in a colour (or contacts in an island) from which a sweep's pass over them spreads
-/// over the pool, a thread taking `PIECE` at once. A body's descent takes ~0.4 µs (the stack's
-/// sweeps, one thread), so a smaller colour is under ~25 µs of work, where a pass's hand-over
-/// costs a few (a pyramid's colours are a few bricks each).
+/// over the pool. A body's descent takes ~0.4 µs (the stack's sweeps, one thread), so a smaller
+/// colour is under ~25 µs of work, where a pass's hand-over costs a few (a pyramid's colours
+/// are a few bricks each). (Shared by a counter, `spread::share`, in chunks of 16, a 288-brick
+/// island's colours of 72 came out no faster than by rayon's split, 5–7% slower in one set.)
 const SPREAD_FROM: usize = 64;
-const PIECE: usize = 16;
 
 /// `sweeps` rounds of block descent, colour by colour, each followed by the dual step, each
 /// pass large enough spread over `pool`; returns the overlap left beyond the target after the
@@ -369,9 +369,10 @@ fn sweep(
                 Some(pool) => {
                     spread += 1;
                     let frozen = &*bodies;
-                    let moved = spread::share(Some(pool), colour.len(), PIECE, |k| {
-                        let i = colour[k];
-                        descend(&frozen[i], frozen, contacts, &rows.of[i])
+                    let moved: Vec<Move> = spread::pass(|| {
+                        pool.install(|| {
+                            colour.par_iter().map(|&i| descend(&frozen[i], frozen, contacts, &rows.of[i])).collect()
+                        })
                     });
                     for (&i, m) in colour.iter().zip(moved) {
                         bodies[i].moved = m;
@@ -387,9 +388,7 @@ fn sweep(
         // the largest overlap is the same taken in any order
         let frozen = &*bodies;
         residual = spread::pass(|| match pool.filter(|_| contacts.len() >= SPREAD_FROM) {
-            Some(pool) => pool.install(|| {
-                contacts.par_iter_mut().with_min_len(PIECE).map(|c| c.update(frozen)).reduce(|| 0.0, f64::max)
-            }),
+            Some(pool) => pool.install(|| contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max)),
             None => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
         });
     }
