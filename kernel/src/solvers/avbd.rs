@@ -250,8 +250,8 @@ fn shares(islands: &Islands, threads: usize) -> bool {
 
 impl Avbd {
     /// One island's step: its contacts' rows at the step's start (warm-started from last step's
-    /// by their pair in the state), its colours, its sweeps (each colour spread over the current
-    /// `pool`, where it is large enough to pay). An island's levels and greedy colours are decided within it, so its
+    /// by their pair in the state), its colours, its sweeps (each colour large enough to pay
+    /// spread over `pool`). An island's levels and greedy colours are decided within it, so its
     /// bodies descend in the order they take in a sweep over all: the same bits whether the
     /// bodies are swept island by island or all at once.
     fn solve(&self, island: Island, all: &[Body], start: &[Pose], pool: Option<&ThreadPool>) -> Solved {
@@ -346,8 +346,8 @@ fn keep(c: &Contact, bodies: &[Body], start: &[Pose], index: &[usize]) -> (Key, 
 /// Bodies in a colour (or contacts in an island) from which a sweep's pass over them spreads
 /// over the pool. A body's descent takes ~0.4 µs (the stack's sweeps, one thread), so a smaller
 /// colour is under ~25 µs of work, where a pass's hand-over costs a few (a pyramid's colours
-/// are a few bricks each). (Shared by a counter, `spread::share`, in chunks of 16, a 288-brick
-/// island's colours of 72 came out no faster than by rayon's split, 5–7% slower in one set.)
+/// are a few bricks each). (A large colour shared by a counter, `spread::share`, was no faster
+/// than rayon's split: docs/bench.)
 const SPREAD_FROM: usize = 64;
 
 /// `sweeps` rounds of block descent, colour by colour, each followed by the dual step, each

@@ -111,7 +111,8 @@ fn on_the_floor(solids: &str, threads: usize, steps: u64) -> (State, String) {
 }
 
 /// One island too large for the islands to share out: its colours (a layer's checkerboard, 72
-/// bricks each, over `SPREAD_FROM`) spread over the pool, and the dual step too; the same bits on 1 (none spread), 2 and 7 threads.
+/// bricks each, over `SPREAD_FROM`) spread over the pool, and the dual step too; the same bits
+/// on 1 (none spread), 2 and 7 threads.
 #[test]
 fn a_pile_of_one_island_gives_the_same_bits_on_any_number_of_threads() {
     let bricks: String = (0..288)
