@@ -25,7 +25,7 @@ mod grid;
 
 /// One point of contact between `a` (none: the floor) and `b`: `normal` points from a to b,
 /// `depth` > 0 is an overlap, < 0 a gap of a speculative contact.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Touch {
     pub a: Option<usize>,
     pub b: usize,
@@ -146,9 +146,11 @@ impl Solids {
             (floors, pairs)
         };
         let runs = spread::share(pool, self.solids.len().div_ceil(RUN), 1, run);
+        // a run's list at a time, each a copy of memory (a flat iterator over them pushed touch
+        // by touch: 90 µs a step on the stack's 4,000 touches, serial)
         let mut out = Vec::with_capacity(runs.iter().map(|r| r.0.len() + r.1.len()).sum());
-        out.extend(runs.iter().flat_map(|r| &r.0).cloned());
-        out.extend(runs.into_iter().flat_map(|r| r.1));
+        runs.iter().for_each(|r| out.extend_from_slice(&r.0));
+        runs.iter().for_each(|r| out.extend_from_slice(&r.1));
         out
     }
 }
