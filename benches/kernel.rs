@@ -137,9 +137,9 @@ fn neighbour_build(c: &mut Criterion) {
     });
     // the list made ahead of a checkpoint, and the checkpoint's pairs taken from it
     group.bench_function("checker_lj_32k_foreseen", |b| {
-        b.iter(|| black_box(Foreseen::new(black_box(&lj.x0), &lj.model.cell, reach).is_some()))
+        b.iter(|| black_box(Foreseen::new(black_box(&lj.x0), &lj.model.cell, reach, 1).is_some()))
     });
-    let ahead = [Foreseen::new(&lj.x0, &lj.model.cell, reach).expect("a grid for 32,000 atoms")];
+    let ahead = [Foreseen::new(&lj.x0, &lj.model.cell, reach, 1).expect("a grid for 32,000 atoms")];
     group.bench_function("checker_lj_32k_from_foreseen", |b| {
         b.iter(|| {
             let near = Neighbourhood::new(black_box(&lj.x0), &lj.model.cell, Some(reach), &ahead);

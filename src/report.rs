@@ -140,7 +140,7 @@ impl Summary {
                 .chain(r.solver_plan.iter().map(|p| ("solver", p.clone())))
                 .collect(),
             checker: r.checker,
-            checker_helpers: lagra_checker::quantities::helpers_started(),
+            checker_helpers: lagra_checker::helpers::started(),
             checker_parts: parts_said(&r.outcome.parts),
             explain,
             claims,

@@ -15,6 +15,7 @@
 //! checkpoint while no body has moved far, which the checkpoint tests; it then keeps the same
 //! pairs by the same distance test, without a grid.
 
+use crate::helpers::in_order;
 use crate::model::{Cell, Images};
 use std::ops::Range;
 use std::sync::OnceLock;
@@ -72,31 +73,70 @@ pub struct Neighbourhood<'a> {
 pub struct Foreseen {
     x: Vec<[f64; 3]>,
     reach: f64,
-    /// List p, of body `bodies[p]`: `after[start[p]..start[p + 1]]`, each pair once, under either
-    /// of its bodies (in the grid's order, `Neighbourhood::half_shells`: no sort; 32 bits each:
-    /// this list is built beside the kernel's own, and half the size is half the memory traffic).
+    /// The lists, made in pieces of `CELLS_A_PIECE` of the grid's cells on the helpers: list p
+    /// of the whole is list p − first[k] of piece k, where first[k] ≤ p < first[k + 1] (one
+    /// more entry: the number of lists).
+    pieces: Vec<Lists>,
+    first: Vec<usize>,
+}
+
+/// The lists of a run of the grid's cells: list p, of body `bodies[p]`, is
+/// `after[start[p]..start[p + 1]]`, each pair once, under either of its bodies (in the grid's
+/// order, `Neighbourhood::half_shells`: no sort; 32 bits each: this list is built beside the
+/// kernel's own, and half the size is half the memory traffic).
+#[derive(Default)]
+struct Lists {
     bodies: Vec<u32>,
     start: Vec<usize>,
     after: Vec<u32>,
 }
 
+/// Cells a piece of a `Foreseen` list: 32,000 LJ atoms bin into ~1,000 cells, 256,000 into
+/// ~8,000 (125 pieces, some 1.6 ms of listing each).
+const CELLS_A_PIECE: usize = 64;
+
 impl Foreseen {
-    /// The list for `reach`, from the state at `x`; none where the grid would not be used (few
-    /// bodies, or coordinates too large for its rounding argument) or for 2³² bodies or more.
-    pub fn new(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64) -> Option<Foreseen> {
+    /// The list for `reach`, from the state at `x`, made on up to `threads` of the helpers (the
+    /// same list on any number); none where the grid would not be used (few bodies, or
+    /// coordinates too large for its rounding argument) or for 2³² bodies or more.
+    pub fn new(x: &[[f64; 3]], cell: &Option<Cell>, reach: f64, threads: usize) -> Option<Foreseen> {
         let wide = Neighbourhood::new(x, cell, Some(reach * (1.0 + SKIN)), &[]);
         let b = wide.bins.as_ref().filter(|_| u32::try_from(x.len()).is_ok())?;
-        // a list for each body with partners (a body's partners come one after another)
-        let (mut bodies, mut start, mut after) = (vec![], vec![], vec![]);
-        wide.half_shells(b, 0..b.start.len() - 1, |i, j| {
-            if bodies.last() != Some(&(i as u32)) {
-                bodies.push(i as u32);
-                start.push(after.len());
-            }
-            after.push(j as u32);
+        let cells = b.start.len() - 1;
+        let pieces = in_order(cells.div_ceil(CELLS_A_PIECE), threads, |k| {
+            // a list for each body with partners (a body's partners come one after another)
+            let mut l = Lists::default();
+            wide.half_shells(b, k * CELLS_A_PIECE..((k + 1) * CELLS_A_PIECE).min(cells), |i, j| {
+                if l.bodies.last() != Some(&(i as u32)) {
+                    l.bodies.push(i as u32);
+                    l.start.push(l.after.len());
+                }
+                l.after.push(j as u32);
+            });
+            l.start.push(l.after.len());
+            l
         });
-        start.push(after.len());
-        Some(Foreseen { x: x.to_vec(), reach, bodies, start, after })
+        let counts = pieces.iter().scan(0, |n, l| {
+            *n += l.bodies.len();
+            Some(*n)
+        });
+        let first = std::iter::once(0).chain(counts).collect();
+        Some(Foreseen { x: x.to_vec(), reach, pieces, first })
+    }
+
+    /// `f(i, js)` for each list p in `lists`, a range of `0..lists()`: its body i and the
+    /// bodies listed under it.
+    fn each(&self, lists: Range<usize>, mut f: impl FnMut(usize, &[u32])) {
+        for p in lists {
+            let k = self.first.partition_point(|&s| s <= p) - 1;
+            let (l, q) = (&self.pieces[k], p - self.first[k]);
+            f(l.bodies[q] as usize, &l.after[l.start[q]..l.start[q + 1]]);
+        }
+    }
+
+    /// How many lists: bodies with a partner.
+    fn lists(&self) -> usize {
+        self.first.last().copied().unwrap_or(0)
     }
 
     pub fn reach(&self) -> f64 {
@@ -244,7 +284,7 @@ impl<'a> Neighbourhood<'a> {
     /// grid's cells, else the bodies.
     pub fn parts(&self) -> usize {
         let cells = self.bins.as_ref().map_or(self.x.len(), |b| b.start.len() - 1);
-        self.listed.map_or(cells, |l| l.bodies.len())
+        self.listed.map_or(cells, Foreseen::lists)
     }
 
     /// `f(pairs)` for the pairs within reach whose first body (by the double loop), whose list
@@ -265,18 +305,15 @@ impl<'a> Neighbourhood<'a> {
             }
         };
         match (self.listed, &self.bins) {
-            (Some(l), _) => {
-                for p in part {
-                    let i = l.bodies[p] as usize;
-                    for run in l.after[l.start[p]..l.start[p + 1]].chunks(RUN) {
-                        let mut placed = [[f64::NAN; RUN]; 3];
-                        for (k, &j) in run.iter().enumerate() {
-                            (0..3).for_each(|a| placed[a][k] = self.x[j as usize][a]);
-                        }
-                        each_kept(self.passed(i, placed.each_ref()), |k| add(i, run[k] as usize));
+            (Some(l), _) => l.each(part, |i, listed| {
+                for run in listed.chunks(RUN) {
+                    let mut placed = [[f64::NAN; RUN]; 3];
+                    for (k, &j) in run.iter().enumerate() {
+                        (0..3).for_each(|a| placed[a][k] = self.x[j as usize][a]);
                     }
+                    each_kept(self.passed(i, placed.each_ref()), |k| add(i, run[k] as usize));
                 }
-            }
+            }),
             (None, Some(b)) => self.half_shells(b, part, add),
             (None, None) => self.each(part, |i, js| js.iter().for_each(|&j| add(i, j))),
         }
@@ -521,7 +558,7 @@ mod tests {
         fn a_list_made_ahead_gives_the_pairs_of_the_grid(
             pts in prop::collection::vec(prop::array::uniform3(0.0f64..12.0), 64..400),
             moves in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 400),
-            reach in 1.2f64..2.0, wrap in any::<bool>(), far in 0usize..64,
+            reach in 1.2f64..2.0, wrap in any::<bool>(), far in 0usize..64, threads in 1usize..4,
         ) {
             let side = 12.0;
             let cell = Some(Cell { size: [side; 3], periodic: [true; 3] });
@@ -532,7 +569,7 @@ mod tests {
                     if wrap { q.map(|c| c.rem_euclid(side)) } else { q }
                 }).collect()
             };
-            let ahead = [Foreseen::new(&pts, &cell, reach).expect("a grid")];
+            let ahead = [Foreseen::new(&pts, &cell, reach, threads).expect("a grid")];
             let later = moved(most);
             let near = Neighbourhood::new(&later, &cell, Some(reach), &ahead);
             prop_assert!(near.listed.is_some());

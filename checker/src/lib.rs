@@ -15,6 +15,7 @@ pub mod cli;
 pub mod decision;
 pub mod enclosure;
 mod exact_sum;
+pub mod helpers;
 mod joints;
 pub mod model;
 pub mod monitor;

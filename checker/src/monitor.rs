@@ -268,11 +268,11 @@ impl Monitor {
     }
 
     /// Lists, from a state `foresight()` steps before a checkpoint, the pairs that checkpoint's
-    /// pair sums will look at, so that it need not bin its bodies. The verdicts are the same
-    /// bits with or without it: a list that does not hold every pair the checkpoint needs is
-    /// not used.
+    /// pair sums will look at, so that it need not bin its bodies; on the threads it is set to
+    /// (`set_threads`). The verdicts are the same bits with or without it: a list that does not
+    /// hold every pair the checkpoint needs is not used.
     pub fn foresee(&mut self, s: &Snapshot) {
-        self.ahead = foresee(&self.model, s).into();
+        self.ahead = foresee(&self.model, s, self.threads).into();
     }
 
     /// The first step after `after` at which `observe` has anything to do (`u64::MAX`: none):

@@ -18,7 +18,7 @@ mod parts;
 /// against 0.97 s.
 const SPREAD_FROM: usize = 512;
 
-pub use pair_sums::{asked_reach, foresee, helpers_started, pair_reaches, PairSum};
+pub use pair_sums::{asked_reach, foresee, pair_reaches, PairSum};
 pub use parts::{Local, Part, Parts, Region, Whole, PART_BITS};
 
 /// The model and one state lifted into `R` (`proto` fixes the kind and precision).

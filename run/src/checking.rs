@@ -71,24 +71,33 @@ impl<'s> Checking<'s> {
         let thread = scope.spawn(move || {
             let mut busy = 0.0;
             for handed in inbox {
-                // CPU time (on one CPU the thread shares it with the kernel's)
+                // CPU time (on one CPU the thread shares it with the kernel's), but wall time
+                // where the work spreads over every CPU: this thread's CPU time would miss its
+                // helpers'
                 let started = (cpu_time::ThreadTime::now(), std::time::Instant::now());
-                let (s, parts) = match handed {
+                let took = |threads: usize| match threads {
+                    1 => started.0.elapsed().as_secs_f64(),
+                    _ => started.1.elapsed().as_secs_f64(),
+                };
+                let verdict = match handed {
                     Handed::Ahead(s) => {
+                        // every CPU: at many threads the kernel's FORESIGHT steps are over
+                        // before one thread would have listed 256,000 bodies (~0.2 s)
+                        monitor.set_threads(cpus);
                         monitor.foresee(&s.snapshot());
-                        busy += started.0.elapsed().as_secs_f64();
+                        busy += took(cpus);
                         continue;
                     }
-                    Handed::Checkpoint(s, parts) => (s, parts),
+                    Handed::Checkpoint(s, parts) => {
+                        // one thread while the kernel steps on; every CPU for the last
+                        // checkpoint, which nothing else overlaps
+                        let threads = if s.step == last { cpus } else { 1 };
+                        monitor.set_threads(threads);
+                        let verdict = monitor.observe_with(&s.snapshot(), parts.as_ref()).map_err(|h| (h, s));
+                        busy += took(threads);
+                        verdict
+                    }
                 };
-                // one thread while the kernel steps on; every CPU for the last checkpoint, which
-                // nothing else overlaps
-                monitor.set_threads(if s.step == last { cpus } else { 1 });
-                let verdict = monitor.observe_with(&s.snapshot(), parts.as_ref()).map_err(|h| (h, s));
-                // but wall time where the sums spread over every CPU (the last checkpoint, which
-                // the kernel waits for): this thread's CPU time would miss its helpers'
-                let took = if monitor.threads() > 1 { started.1.elapsed() } else { started.0.elapsed() };
-                busy += took.as_secs_f64();
                 if outbox.send(verdict).is_err() {
                     break;
                 }

@@ -6,15 +6,14 @@ use super::Lifted;
 use crate::broad_phase::{Foreseen, Near, Neighbourhood};
 use crate::enclosure::Enclosure;
 use crate::exact_sum::ExactSum;
+use crate::helpers::in_order;
 use crate::model::{Model, Snapshot, TermInstance};
 use crate::mpfi::Mpfi;
 use crate::outward::lanes::{Lanes, WIDTH};
 use crate::outward::Outward;
 use crate::real::Real;
 use crate::terms::{Kind, Shape, Site};
-use rayon::prelude::*;
 use rug::float::Round;
-use std::sync::OnceLock;
 
 impl<R: PairSum> Lifted<R> {
     /// `pairs` for `sum`, in the double loop's order: those of the first `CHUNK` bodies added to
@@ -181,75 +180,21 @@ pub fn pair_reaches(model: &Model) -> Vec<f64> {
 }
 
 /// The pair lists the pair terms with a reach will want a few steps after state `s`
-/// (`Foreseen`): one per reach, none where a grid would not be used.
-pub fn foresee(model: &Model, s: &Snapshot) -> Vec<Foreseen> {
-    pair_reaches(model).into_iter().filter_map(|r| Foreseen::new(s.x, &model.cell, r)).collect()
+/// (`Foreseen`), made on up to `threads` of the helpers: one per reach, none where a grid would
+/// not be used.
+pub fn foresee(model: &Model, s: &Snapshot, threads: usize) -> Vec<Foreseen> {
+    pair_reaches(model).into_iter().filter_map(|r| Foreseen::new(s.x, &model.cell, r, threads)).collect()
 }
 
 /// Bodies whose pairs are summed alone before their sum joins the total (see `Lifted::sum`).
 const CHUNK: usize = 128;
 
-/// `f(k)` for k in 0..n, in order of k, computed on up to `threads` of the helpers (helper w
-/// takes k ≡ w mod threads). Which helper computes which k changes nothing: each result is
-/// put back at its k.
-pub(super) fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let threads = threads.clamp(1, n.max(1));
-    let Some(pool) = (threads > 1).then(helpers).flatten() else {
-        return (0..n).map(f).collect();
-    };
-    let f = &f;
-    let parts: Vec<Vec<T>> =
-        pool.install(|| (0..threads).into_par_iter().map(|w| (w..n).step_by(threads).map(f).collect()).collect());
-    let mut parts: Vec<_> = parts.into_iter().map(Vec::into_iter).collect();
-    (0..n).map(|k| parts[k % threads].next().expect("every k was computed")).collect()
-}
-
-/// The checker's helpers: one pool for the process, started by the first sum that spreads
-/// (a checkpoint starts no thread); `None` if the system refuses threads (then one does all).
-static HELPERS: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
-
-fn helpers() -> Option<&'static rayon::ThreadPool> {
-    HELPERS
-        .get_or_init(|| {
-            let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-            rayon::ThreadPoolBuilder::new().num_threads(cpus).thread_name(|i| format!("lagra-checker-{i}")).build().ok()
-        })
-        .as_ref()
-}
-
-/// How many helpers this process has started: 0 until a sum first spreads, then the pool's
-/// size for the rest of the run.
-pub fn helpers_started() -> usize {
-    HELPERS.get().and_then(Option::as_ref).map_or(0, |p| p.current_num_threads())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::{Body, Cell, UnitSystem};
-    use proptest::prelude::*;
     use rug::Float;
     use std::sync::Arc;
-
-    proptest! {
-        /// `in_order` gives f(0), …, f(n − 1) in order, whatever the thread count.
-        #[test]
-        fn in_order_is_the_sequential_map(n in 0usize..40, threads in 0usize..6) {
-            prop_assert_eq!(in_order(n, threads, |k| k * k + 1), (0..n).map(|k| k * k + 1).collect::<Vec<_>>());
-        }
-    }
-
-    /// Sums spread over the same helpers time after time: a hundred spread sums run on no more
-    /// threads than the pool holds (a thread started per sum would be a new thread each time).
-    #[test]
-    fn spread_sums_start_no_threads_of_their_own() {
-        let seen = std::sync::Mutex::new(std::collections::HashSet::new());
-        for _ in 0..100 {
-            in_order(8, 4, |_| seen.lock().unwrap().insert(std::thread::current().id()));
-        }
-        let seen = seen.into_inner().unwrap().len();
-        assert!(seen <= helpers_started().max(1), "{seen} threads for a pool of {}", helpers_started());
-    }
 
     /// 2,197 LJ atoms in a periodic box: ~50,000 pairs, a dozen chunks.
     fn liquid() -> (Model, Vec<[f64; 3]>, Vec<[f64; 3]>) {
@@ -351,7 +296,7 @@ mod tests {
         let earlier: Vec<[f64; 3]> =
             x.iter().zip(&v).map(|(p, u)| std::array::from_fn(|a| p[a] - 0.5 * u[a])).collect();
         let ahead: Arc<[Foreseen]> =
-            foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[], spin: &[] }).into();
+            foresee(&m, &Snapshot { step: 0, t: 0.0, x: &earlier, v: &v, chain: &[], spin: &[] }, 2).into();
         assert_eq!(ahead.len(), 1);
         let bits = |x: &[[f64; 3]], ahead: Arc<[Foreseen]>| {
             let e = Lifted::new(&m, &Snapshot { step: 0, t: 0.0, x, v: &v, chain: &[], spin: &[] }, &Outward::NAN)
