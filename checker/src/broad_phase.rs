@@ -11,9 +11,9 @@
 //! loop over every pair, so the sums built from them do not depend on the grid.
 //!
 //! A checkpoint's pairs can also be listed ahead, from a state a few steps before it
-//! (`Foreseen`, `foreseen.rs`): the pairs within a wider reach there hold every pair within reach at the
-//! checkpoint while no body has moved far, which the checkpoint tests; it then keeps the same
-//! pairs by the same distance test, without a grid.
+//! (`Foreseen`, `foreseen.rs`): the pairs within a wider reach there hold every pair within
+//! reach at the checkpoint while no body has moved far, which the checkpoint tests; it then
+//! keeps the same pairs by the same distance test, without a grid.
 
 use crate::model::{Cell, Images};
 use std::ops::Range;
