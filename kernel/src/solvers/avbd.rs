@@ -401,19 +401,23 @@ fn sweep(
                         bodies[i].moved = m;
                     }
                 }
-                None => spread::pass(|| {
+                // not a pass of its own: on a pool, a colour too small to spread at any thread
+                // count (serial); without one, part of an island's task, its pass already
+                None => {
                     for &i in colour {
                         bodies[i].moved = descend(&bodies[i], bodies, contacts, &rows.of[i]);
                     }
-                }),
+                }
             }
         }
         // the largest overlap is the same taken in any order
         let frozen = &*bodies;
-        residual = spread::pass(|| match pool.filter(|_| contacts.len() >= SPREAD_FROM) {
-            Some(pool) => pool.install(|| contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max)),
+        residual = match pool.filter(|_| contacts.len() >= SPREAD_FROM) {
+            Some(pool) => spread::pass(|| {
+                pool.install(|| contacts.par_iter_mut().map(|c| c.update(frozen)).reduce(|| 0.0, f64::max))
+            }),
             None => contacts.iter_mut().map(|c| c.update(frozen)).fold(0.0, f64::max),
-        });
+        };
     }
     (residual, spread)
 }
