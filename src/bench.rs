@@ -42,6 +42,7 @@ enum Study {
         /// Timings of each; the fastest counts (the least disturbed by other load).
         #[arg(long, default_value_t = 7)]
         repeats: u32,
+        /// Both timings and their ratio as one JSON object.
         #[arg(long)]
         json: bool,
     },
@@ -58,6 +59,7 @@ enum Study {
         /// Threads for both the forward run and the gradient (the same bits on any count).
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// Each system's forward and gradient times and their ratio as JSON.
         #[arg(long)]
         json: bool,
     },
@@ -76,6 +78,7 @@ enum Study {
         /// 12,000 steps each, equilibrating over the first 10 time units: a smoke run.
         #[arg(long)]
         quick: bool,
+        /// Each state point's measured and published values as JSON.
         #[arg(long)]
         json: bool,
     },

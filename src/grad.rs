@@ -83,8 +83,10 @@ pub struct FitArgs {
     /// The most L-BFGS iterations.
     #[arg(long, value_name = "N", default_value_t = 50)]
     iterations: u64,
+    /// Threads for each run of the scene and its gradient (the same bits for any count).
     #[arg(long, value_name = "N", default_value_t = 1)]
     threads: usize,
+    /// Print one JSON object (the fitted and starting values, the loss at each, the iterations) instead of text.
     #[arg(long)]
     json: bool,
     /// A progress bar on stderr (the objective's evaluations): `auto` on a terminal when the fit

@@ -86,3 +86,27 @@ fn main() -> ExitCode {
         Command::View(args) => view::main(args),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// The options of `c` and of every command under it that `--help` shows without a word of
+    /// what they do, as "lagra fit --threads".
+    fn unexplained(c: &clap::Command, path: &str) -> Vec<String> {
+        let path = format!("{path} {}", c.get_name()).trim().to_string();
+        let bare = c.get_arguments().filter(|a| !a.is_hide_set() && a.get_help().is_none());
+        let mut found: Vec<String> = bare.map(|a| format!("{path} --{}", a.get_id())).collect();
+        c.get_subcommands().for_each(|s| found.extend(unexplained(s, &path)));
+        found
+    }
+
+    /// clap's own checks of the commands (conflicting names, defaults a parser refuses), and
+    /// every option of every command says in `--help` what it does.
+    #[test]
+    fn every_option_says_what_it_does() {
+        Cli::command().debug_assert();
+        assert_eq!(unexplained(&Cli::command(), ""), Vec::<String>::new());
+    }
+}

@@ -162,7 +162,7 @@ impl Table {
 }
 
 /// The names of a kind's parameters, vector parameters by component (`g_0 g_1 g_2`), in the
-/// order of the flattened parameter list: the names the derivation gives them.
+/// order of the flattened parameter list: the names the derivation and the Lean export give them.
 pub fn parameter_names(kind: Kind) -> Vec<String> {
     kind.spec()
         .params
