@@ -293,3 +293,89 @@ fn a_figure_is_read_from_the_docs() {
     assert_eq!(figure_after("core 3743\nterm definitions 631", "term definitions"), 631);
     assert_ne!(figure_after("a core of 3,743 lines", "a core of"), 4221);
 }
+
+/// GitHub's anchor for a heading: lower case, punctuation dropped but for `-` and `_`, spaces as
+/// hyphens ("The last checkpoint's list (2026-12-04)" is `the-last-checkpoints-list-2026-12-04`);
+/// a heading seen before gets `-1`, `-2`, ….
+fn anchors(markdown: &str) -> BTreeSet<String> {
+    let mut seen = BTreeSet::new();
+    for (_, line) in prose(markdown).filter(|l| l.1.starts_with('#')) {
+        let slug: String = line
+            .trim_start_matches('#')
+            .trim()
+            .to_lowercase()
+            .chars()
+            .filter(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | ' '))
+            .map(|c| if c == ' ' { '-' } else { c })
+            .collect();
+        let free = (0..).map(|n| if n == 0 { slug.clone() } else { format!("{slug}-{n}") }).find(|s| !seen.contains(s));
+        seen.insert(free.expect("a free name"));
+    }
+    seen
+}
+
+/// The lines of a markdown text outside its fenced code blocks, numbered from 1.
+fn prose(markdown: &str) -> impl Iterator<Item = (usize, &str)> {
+    let mut fenced = false;
+    markdown.lines().enumerate().filter_map(move |(n, l)| {
+        let fence = l.starts_with("```");
+        fenced ^= fence;
+        (!fenced && !fence).then_some((n + 1, l))
+    })
+}
+
+/// The targets of the inline links `[text](target)` outside code blocks, with their lines.
+fn links(markdown: &str) -> Vec<(usize, &str)> {
+    let mut found = vec![];
+    for (n, line) in prose(markdown) {
+        for (at, _) in line.match_indices("](") {
+            let rest = &line[at + 2..];
+            found.push((n, &rest[..rest.find(')').unwrap_or(rest.len())]));
+        }
+    }
+    found
+}
+
+/// Every link of the project's own markdown (README.md, docs/) to a file of the project names one
+/// that is there, and every `#anchor` a heading of its file: a section renamed or moved (as the
+/// goals' log moved to docs/bench/history.md) leaves no link to nothing behind.
+#[test]
+fn every_link_of_the_docs_leads_somewhere() {
+    let mut docs = vec![root().join("README.md")];
+    let mut folders = vec![root().join("docs")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(folder).unwrap().map(Result::unwrap) {
+            match entry.path() {
+                p if p.is_dir() => folders.push(p),
+                p if p.extension().is_some_and(|e| e == "md") => docs.push(p),
+                _ => {}
+            }
+        }
+    }
+    let mut broken = vec![];
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).unwrap();
+        for (line, target) in links(&text).into_iter().filter(|(_, t)| !t.contains(':')) {
+            let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
+            let path = if file.is_empty() { doc.clone() } else { doc.parent().unwrap().join(file) };
+            let at = format!("{}:{line}: ({target})", doc.strip_prefix(root()).unwrap().display());
+            if !path.exists() {
+                broken.push(format!("{at}: no such file"));
+            } else if !anchor.is_empty() && !anchors(&std::fs::read_to_string(&path).unwrap()).contains(anchor) {
+                broken.push(format!("{at}: no such heading"));
+            }
+        }
+    }
+    assert!(docs.len() > 10, "{docs:?}");
+    assert_eq!(broken, Vec::<String>::new());
+}
+
+/// The anchors are GitHub's, and a link inside a code block is not a link.
+#[test]
+fn anchors_are_githubs_and_code_blocks_hold_no_links() {
+    let doc = "# Threads on 16 cores, beside LAMMPS (2026-11-27)\n## The last checkpoint's list\n## A\n## A\n\
+               ```\n## not a heading [x](nowhere.md)\n```\nsee [it](docs/x.md#y) and [b](#c)\n";
+    let want = ["threads-on-16-cores-beside-lammps-2026-11-27", "the-last-checkpoints-list", "a", "a-1"];
+    assert_eq!(anchors(doc), want.into_iter().map(String::from).collect());
+    assert_eq!(links(doc), vec![(8, "docs/x.md#y"), (8, "#c")]);
+}
