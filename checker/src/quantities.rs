@@ -34,7 +34,8 @@ pub struct Lifted<R> {
     x: Vec<[f64; 3]>,
     cell: Option<Cell>,
     images: Images,
-    /// Threads to sum pair terms on (the bits are the same for any count).
+    /// Threads to sum pair terms and the bodies' kinetic energy and momenta on (the bits are the
+    /// same for any count).
     threads: usize,
     /// Pair lists made ahead of this state, used where they hold (the bits are the same).
     ahead: Arc<[Foreseen]>,
@@ -87,8 +88,8 @@ impl<R: PairSum> Lifted<R> {
         self.sites
     }
 
-    /// The same, summing pair terms on `n` threads if there are bodies enough to pay for
-    /// handing the work out (`SPREAD_FROM`), else on one.
+    /// The same, summing on `n` threads if there are bodies enough to pay for handing the work
+    /// out (`SPREAD_FROM`), else on one.
     pub fn on_threads(self, n: usize) -> Self {
         Lifted { threads: if self.x.len() >= SPREAD_FROM { n } else { 1 }, ..self }
     }
@@ -159,7 +160,8 @@ impl<R: PairSum> Lifted<R> {
     /// ½ Σ m |v|², and each rigid body's ½ Σ π_k² / I_k.
     pub fn kinetic(&self) -> R {
         let half = self.zero.lift(0.5);
-        let moving = R::sum_of(self.zero.clone(), self.sites.iter().map(|s| half.clone() * s.m.clone() * norm2(&s.v)));
+        let each = |i: usize| half.clone() * self.sites[i].m.clone() * norm2(&self.sites[i].v);
+        let moving = R::sum_over(self.zero.clone(), self.sites.len(), self.threads, each);
         self.spins.iter().fold(moving, |acc, s| {
             (0..3).fold(acc, |acc, k| acc + half.clone() * s.pi[k].clone().powi(2) / s.moments[k].clone())
         })
@@ -219,7 +221,8 @@ impl<R: PairSum> Lifted<R> {
     /// charge of translations.
     pub fn momentum(&self, model: &Model) -> Vec3<R> {
         let free = std::array::from_fn(|c| {
-            R::sum_of(self.zero.clone(), self.sites.iter().map(|s| s.m.clone() * s.v[c].clone()))
+            let each = |i: usize| self.sites[i].m.clone() * self.sites[i].v[c].clone();
+            R::sum_over(self.zero.clone(), self.sites.len(), self.threads, each)
         });
         self.with_shares(model, free, 0)
     }
@@ -228,11 +231,11 @@ impl<R: PairSum> Lifted<R> {
     pub fn angular_momentum(&self, model: &Model) -> Vec3<R> {
         let free = std::array::from_fn(|c| {
             let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-            let each = self
-                .sites
-                .iter()
-                .map(|s| s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone()));
-            R::sum_of(self.zero.clone(), each)
+            let each = |i: usize| {
+                let s = &self.sites[i];
+                s.m.clone() * (s.x[a].clone() * s.v[b].clone() - s.x[b].clone() * s.v[a].clone())
+            };
+            R::sum_over(self.zero.clone(), self.sites.len(), self.threads, each)
         });
         let spun = self.spins.iter().fold(free, |acc, s| {
             let l = s.world();
