@@ -181,7 +181,7 @@ pub fn compute(
     method: GradMethod,
     threads: usize,
     read: &dyn Fn(&str) -> Result<String, String>,
-    tell: &mut dyn FnMut(&str, u64, u64),
+    tell: &mut (dyn FnMut(&str, u64, u64) + Send),
 ) -> Result<(Vec<Gradient>, String), String> {
     let objective = Objective::parse_reading(spelling, scene, read)?;
     let wrt = params::parse_list(wrt, scene)?;
