@@ -40,6 +40,16 @@ pub struct Pieces {
 }
 
 impl Pieces {
+    /// These pieces made a copy of `from` in the memory they hold (`Neighbours::copy_from`).
+    pub fn copy_from(&mut self, from: &Pieces, pool: Option<&ThreadPool>) {
+        let Pieces { bounds, sizes, place, first, parts } = self;
+        bounds.clone_from(&from.bounds);
+        sizes.clone_from(&from.sizes);
+        spread::copy(pool, place, &from.place);
+        spread::copy(pool, first, &from.first);
+        spread::copy(pool, parts, &from.parts);
+    }
+
     /// The number of pieces for a list of `clusters` clusters: the size alone decides.
     pub fn count_for(clusters: usize) -> usize {
         (clusters / PIECE_CLUSTERS).clamp(1, MOST)

@@ -55,6 +55,27 @@ pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
     }
 }
 
+/// `into` made a copy of `from` (in the memory it holds, where that is enough), as a pass in
+/// `BLOCK`s on the pool's threads where `from` is long enough to spread. A large copy is bound
+/// by memory, and more cores draw more of its bandwidth; fresh memory's page faults are taken
+/// where it is written, on those threads. A gradient copies states and lists at every step of
+/// its replays: on one thread they were most of its serial part.
+pub fn copy<T: Copy + Send + Sync>(pool: Option<&ThreadPool>, into: &mut Vec<T>, from: &[T]) {
+    into.clear();
+    let spreads = from.len() >= SPREAD_FROM;
+    pass_if(spreads, || match pool.filter(|_| spreads) {
+        Some(pool) => pool.install(|| into.par_extend(from.par_iter().copied().with_min_len(BLOCK))),
+        None => into.extend_from_slice(from),
+    })
+}
+
+/// A copy of `from`, made as [`copy`] makes it.
+pub fn copied<T: Copy + Send + Sync>(pool: Option<&ThreadPool>, from: &[T]) -> Vec<T> {
+    let mut into = vec![];
+    copy(pool, &mut into, from);
+    into
+}
+
 /// `f(i)` for i in `0..n`, in order, on the pool's threads if there is one (each value its
 /// own: the same values either way), as a pass.
 pub fn each<U: Send>(pool: Option<&ThreadPool>, n: usize, f: impl Fn(usize) -> U + Sync + Send) -> Vec<U> {
@@ -382,5 +403,26 @@ mod tests {
         let before = spent();
         std::thread::scope(|s| _ = s.spawn(|| pass(nap)).join());
         assert_eq!(spent(), before);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(16))]
+        /// A copy is its source, on a pool or not, into memory of any length before: the same
+        /// memory where it held enough.
+        #[test]
+        fn a_copy_is_its_source_into_any_memory(len in 0usize..3 * SPREAD_FROM, before in 0usize..3 * SPREAD_FROM, seed: u32) {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+            let from: Vec<u32> = (0..len as u32).map(|i| i.wrapping_mul(2_654_435_761) ^ seed).collect();
+            for pool in [None, Some(&pool)] {
+                let mut into = vec![7u32; before];
+                let (at, room) = (into.as_ptr(), into.capacity());
+                copy(pool, &mut into, &from);
+                proptest::prop_assert_eq!(&into, &from);
+                if room >= len {
+                    proptest::prop_assert_eq!(into.as_ptr(), at);
+                }
+                proptest::prop_assert_eq!(copied(pool, &from), from.clone());
+            }
+        }
     }
 }

@@ -482,11 +482,11 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
     }
     fn save(&self) -> Option<super::Kept> {
         let l = self.list.as_ref()?;
-        Some(Box::new(l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone()))
+        Some(Box::new(l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).copied(self.pool.as_deref())))
     }
     fn restore(&self, kept: &super::Kept) {
         if let (Some(l), Some(saved)) = (&self.list, kept.downcast_ref::<Neighbours>()) {
-            *l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = saved.clone();
+            l.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).copy_from(saved, self.pool.as_deref());
         }
     }
     fn built_at(&self) -> Option<Vec<[f64; 3]>> {

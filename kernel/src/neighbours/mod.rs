@@ -64,7 +64,6 @@ impl Pair {
     }
 }
 
-#[derive(Clone)]
 pub struct Neighbours {
     pub reach: f64,
     pub skin: f64,
@@ -105,6 +104,56 @@ pub struct Spent {
 }
 
 impl Neighbours {
+    /// A copy of the list, made on the pool's threads (`spread::copy`): a gradient saves one at
+    /// each checkpoint and at each rebuild of its replays.
+    pub fn copied(&self, pool: Option<&ThreadPool>) -> Neighbours {
+        let mut into = Neighbours {
+            bodies: vec![],
+            start: vec![],
+            pairs: vec![],
+            at: vec![],
+            offset: vec![],
+            x: vec![],
+            slot: vec![],
+            pieces: Pieces::default(),
+            ..*self
+        };
+        into.copy_from(self, pool);
+        into
+    }
+
+    /// This list made a copy of `from` in the memory it holds, on the pool's threads: a
+    /// gradient's backward pass puts a saved list back dozens of times. Every field is named, so
+    /// that a field added is a compile error here.
+    pub fn copy_from(&mut self, from: &Neighbours, pool: Option<&ThreadPool>) {
+        let Neighbours {
+            reach,
+            skin,
+            bodies,
+            start,
+            pairs,
+            shifts,
+            at,
+            offset,
+            x,
+            slot,
+            pieces,
+            builds,
+            spent,
+            ghosts_from,
+        } = self;
+        (*reach, *skin, *shifts, *builds, *spent, *ghosts_from) =
+            (from.reach, from.skin, from.shifts, from.builds, from.spent, from.ghosts_from);
+        spread::copy(pool, bodies, &from.bodies);
+        spread::copy(pool, start, &from.start);
+        spread::copy(pool, pairs, &from.pairs);
+        spread::copy(pool, at, &from.at);
+        spread::copy(pool, offset, &from.offset);
+        spread::copy(pool, x, &from.x);
+        spread::copy(pool, slot, &from.slot);
+        pieces.copy_from(&from.pieces, pool);
+    }
+
     /// `None` where a list could pick the wrong image: a periodic axis shorter than twice
     /// reach + skin.
     pub fn new(cell: &Option<Cell>, reach: f64) -> Option<Neighbours> {
@@ -471,5 +520,40 @@ mod tests {
         let cell = Some(Cell { size: [5.0; 3], periodic: [true; 3] });
         assert!(Neighbours::new(&cell, 2.5).is_none());
         assert!(Neighbours::new(&None, 2.5).is_some());
+    }
+
+    /// A list copied into another's memory (one built from other bodies, more of them) is the
+    /// list, field by field, and so is a fresh copy; on a pool or not.
+    #[test]
+    fn a_copied_list_is_the_list() {
+        let cell = Some(Cell { size: [12.0; 3], periodic: [true; 3] });
+        let mut rng = Rng::new(5);
+        let mut bodies =
+            |n: usize| -> Vec<[f64; 3]> { (0..n).map(|_| std::array::from_fn(|_| rng.uniform(0.0, 12.0))).collect() };
+        let (x, other) = (bodies(400), bodies(700));
+        let mut list = Neighbours::new(&cell, 2.5).unwrap();
+        list.update(&x, &cell, None);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for pool in [None, Some(&pool)] {
+            let mut into = Neighbours::new(&cell, 2.5).unwrap();
+            into.update(&other, &cell, None);
+            into.copy_from(&list, pool);
+            for copy in [&into, &list.copied(pool)] {
+                let bits = |c: &[Cluster]| -> Vec<u64> {
+                    c.iter().flatten().flat_map(|l| l.to_array()).map(f64::to_bits).collect()
+                };
+                assert_eq!(
+                    (&copy.bodies, &copy.start, &copy.pairs, &copy.slot),
+                    (&list.bodies, &list.start, &list.pairs, &list.slot)
+                );
+                assert_eq!((&copy.at, &copy.offset, bits(&copy.x)), (&list.at, &list.offset, bits(&list.x)));
+                assert_eq!(format!("{:?}", copy.pieces), format!("{:?}", list.pieces));
+                assert_eq!(
+                    (copy.builds, copy.reach, copy.skin, copy.ghosts_from),
+                    (list.builds, list.reach, list.skin, list.ghosts_from)
+                );
+                assert_eq!(listed_within(copy, &x, &cell, 2.5), all_within(&x, &cell, 2.5));
+            }
+        }
     }
 }

@@ -24,6 +24,7 @@ use lagra_kernel::forces::derivative::{Adjoint, Direction, Wanted};
 use lagra_kernel::forces::Kept;
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::solvers::{Evaluated, Stepper};
+use lagra_kernel::spread;
 use lagra_kernel::state::State;
 use lagra_lang::integrator::Integrator;
 use lagra_lang::params::{Named, Param};
@@ -226,7 +227,8 @@ fn reverse(
             break;
         }
         if s.step.is_multiple_of(segment) {
-            checkpoints.push(Checkpoint { state: s.clone(), at: st.evaluated().clone(), lists: g.keep() });
+            let (state, at) = copied(g, &s, st.evaluated());
+            checkpoints.push(Checkpoint { state, at, lists: g.keep() });
         }
         st.step(g, &mut s, dt).map_err(failed(s.step + 1))?;
         tell("forward", s.step, n);
@@ -237,15 +239,10 @@ fn reverse(
     let (start_norm, mut largest) = (kicks::norm(g, &lam).max(f64::MIN_POSITIVE), 1.0f64);
     let mut scratch = kicks::Scratch::new(run);
     let mut opening = vec![[0.0; 3]; s.x.len()];
-    let mut replayed = Replayed { states: vec![], lists: vec![], current: None.into() };
+    let mut replayed = Replayed { states: vec![], checkpoint: None, built: vec![], current: None.into() };
     let velocity = g.velocity_dependent();
     for step in (0..=n).rev() {
-        // the segment that holds this state and the one before it
-        let holding = (step.saturating_sub(1) / segment) as usize;
-        if replayed.states.first().is_none_or(|(r, _)| r.step != holding as u64 * segment) {
-            replay(run, &checkpoints[holding], segment, &mut replayed)?;
-        }
-        replayed.lists_at(g, step);
+        replayed.go_to(run, &checkpoints, segment, step)?;
         let (state, at) = replayed.find(step);
         // the opening kick of step `step` at this state, with the covector (h/m)·b
         if velocity && step < n {
@@ -298,15 +295,28 @@ struct Checkpoint {
 }
 
 /// One segment's states, replayed from its checkpoint, and the lists each state's pairs were
-/// read from: (the first step a list served, the list).
-struct Replayed {
+/// read from: its checkpoint's, then each one the replay built, with the first step it served.
+struct Replayed<'c> {
     states: Vec<(State, Evaluated)>,
-    lists: Vec<(u64, Vec<Option<Kept>>)>,
-    /// Which of `lists` the graph holds, and its build count then (a rebuild since changes it).
+    checkpoint: Option<&'c Checkpoint>,
+    built: Vec<(u64, Vec<Option<Kept>>)>,
+    /// Which lists the graph holds (0 the checkpoint's, k the k-th of `built`), and its build
+    /// count then (a rebuild since changes it).
     current: std::cell::Cell<Option<(usize, u64)>>,
 }
 
-impl Replayed {
+impl<'c> Replayed<'c> {
+    /// The segment that holds `step` and the step before it replayed, if it is not already,
+    /// and the lists the run read at `step` put back.
+    fn go_to(&mut self, run: &Run, checkpoints: &'c [Checkpoint], segment: u64, step: u64) -> Result<(), String> {
+        let holding = (step.saturating_sub(1) / segment) as usize;
+        if self.states.first().is_none_or(|(r, _)| r.step != holding as u64 * segment) {
+            replay(run, &checkpoints[holding], segment, self)?;
+        }
+        self.lists_at(&run.graph, step);
+        Ok(())
+    }
+
     fn find(&self, step: u64) -> &(State, Evaluated) {
         let first = self.states[0].0.step;
         &self.states[(step - first) as usize]
@@ -314,61 +324,76 @@ impl Replayed {
 
     /// Puts back the lists the replay read at `step`, unless the graph holds them already.
     fn lists_at(&self, g: &LagrangianGraph, step: u64) {
-        let Some(k) = self.lists.iter().rposition(|(from, _)| *from <= step) else { return };
+        let Some(c) = self.checkpoint else { return };
+        let k = self.built.iter().rposition(|(from, _)| *from <= step).map_or(0, |k| k + 1);
         if self.current.get() != Some((k, g.builds())) {
-            g.resume(&self.lists[k].1);
+            g.resume(if k == 0 { &c.lists } else { &self.built[k - 1].1 });
             self.current.set(Some((k, g.builds())));
         }
     }
 }
 
 /// The states of one segment, replayed from its checkpoint with the lists as they were: the
-/// same bits as the forward pass. Each list it rebuilds is saved with the step it was built at.
+/// same bits as the forward pass. Each list it rebuilds is saved with the step it was built at;
+/// the lists it starts from are the checkpoint's, read there, not copied, and the graph is left
+/// holding the last, which the backward pass reads first.
 /// The states are copied into the memory the segment before held: fresh copies, each paying
 /// its page faults on the run's thread, were nine tenths of the backward pass's serial time
-/// (32,000 atoms: 0.32 s of 3.1 s).
-fn replay(run: &Run, c: &Checkpoint, segment: u64, out: &mut Replayed) -> Result<(), String> {
+/// (32,000 atoms: 0.32 s of 3.1 s). The copies of states and lists are passes on the graph's
+/// threads (`spread::copy`): on the run's thread they were most of what was left of it
+/// (lj_32k at one thread, `lagra bench gradient`: 4.0–6.0% serial before, 2.0–2.1% after).
+fn replay<'c>(run: &Run, c: &'c Checkpoint, segment: u64, out: &mut Replayed<'c>) -> Result<(), String> {
     let g = &run.graph;
-    let mut s = c.state.clone();
-    let mut st = Stepper::resume_verlet(c.at.clone());
+    let (mut s, at) = copied(g, &c.state, &c.at);
+    let mut st = Stepper::resume_verlet(at);
     g.resume(&c.lists);
     let end = (s.step + segment).min(run.steps);
     let (mut states, mut held) = (std::mem::take(&mut out.states), 0);
     let mut keep = |s: &State, at: &Evaluated| {
         match states.get_mut(held) {
-            Some(kept) => copy_into(kept, s, at),
-            None => states.push((s.clone(), at.clone())),
+            Some(kept) => copy_into(g, kept, s, at),
+            None => states.push(copied(g, s, at)),
         }
         held += 1;
     };
     keep(&s, &c.at);
-    (out.lists, out.current) = (vec![(s.step, g.keep())], None.into());
+    (out.checkpoint, out.built) = (Some(c), vec![]);
     let mut builds = g.builds();
     while s.step < end {
         st.step(g, &mut s, run.dt).map_err(failed(s.step + 1))?;
         if g.builds() != builds {
             builds = g.builds();
-            out.lists.push((s.step, g.keep()));
+            out.built.push((s.step, g.keep()));
         }
         keep(&s, st.evaluated());
     }
     states.truncate(held);
     out.states = states;
+    out.current.set(Some((out.built.len(), builds)));
     Ok(())
 }
 
-/// `kept` made equal to (`s`, `at`) in the memory it holds (every field named, so that a field
-/// added to `State` is a compile error here, not a stale copy).
-fn copy_into((kept, kept_at): &mut (State, Evaluated), s: &State, at: &Evaluated) {
+/// `kept` made equal to (`s`, `at`) in the memory it holds, the bodies' arrays copied on the
+/// graph's threads (`spread::copy`); every field is named, so that a field added to `State` is a
+/// compile error here, not a stale copy.
+fn copy_into(g: &LagrangianGraph, (kept, kept_at): &mut (State, Evaluated), s: &State, at: &Evaluated) {
     let State { step, t, x, v, chain, spin } = kept;
     (*step, *t) = (s.step, s.t);
-    x.clone_from(&s.x);
-    v.clone_from(&s.v);
+    spread::copy(g.spread(), x, &s.x);
+    spread::copy(g.spread(), v, &s.v);
     chain.clone_from(&s.chain);
     spin.clone_from(&s.spin);
     let Evaluated { f, potential } = kept_at;
-    f.clone_from(&at.f);
+    spread::copy(g.spread(), f, &at.f);
     *potential = at.potential;
+}
+
+/// A copy of (`s`, `at`) in fresh memory, made as `copy_into` makes it.
+fn copied(g: &LagrangianGraph, s: &State, at: &Evaluated) -> (State, Evaluated) {
+    let empty = State { step: 0, t: 0.0, x: vec![], v: vec![], chain: vec![], spin: vec![] };
+    let mut kept = (empty, Evaluated { f: vec![], potential: 0.0 });
+    copy_into(g, &mut kept, s, at);
+    kept
 }
 
 /// Adds a pullback's position, mass, charge and parameter adjoints (and its velocity ones, if

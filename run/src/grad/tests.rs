@@ -108,14 +108,16 @@ fn bonds_angles_and_a_trap() {
 /// run is differentiable and the central difference agrees. The two modes agree for the plain
 /// and shifted potentials too (their force jumps at the cutoff: the derivative is that of the
 /// smooth pieces, which a central difference sees only while no pair crosses in between).
+/// 108 atoms of a liquid held by `term` (cut off at 1.8), 60 steps: several list rebuilds.
+fn liquid(term: &str) -> String {
+    format!(
+        "scene l {{ entity atom {{ mass: 1 }} lattice {{ type: atom, density: 0.8442, cells: [3, 3, 3], temperature: 1.5, seed: 4 }}
+           interaction {term} {{ epsilon: 1, sigma: 1, cutoff: 1.8 }} solver {{ dt: 0.005, steps: 60 }} }}"
+    )
+}
+
 #[test]
 fn a_liquid_through_list_rebuilds_and_cutoffs() {
-    let liquid = |term: &str| {
-        format!(
-            "scene l {{ entity atom {{ mass: 1 }} lattice {{ type: atom, density: 0.8442, cells: [3, 3, 3], temperature: 1.5, seed: 4 }}
-               interaction {term} {{ epsilon: 1, sigma: 1, cutoff: 1.8 }} solver {{ dt: 0.005, steps: 60 }} }}"
-        )
-    };
     let scene = compile(&liquid("lj_force_shifted")).unwrap();
     let r = grad(&scene, "energy@end", "lj_force_shifted.epsilon", Method::Reverse);
     let g = LagrangianGraph::new(&scene.model);
@@ -144,6 +146,39 @@ fn a_liquid_through_list_rebuilds_and_cutoffs() {
             false => (liquid(term).replace(", cutoff: 1.8", ""), format!("{term}.epsilon,{term}.sigma")),
         };
         agree(&text, "energy@end", &wrt);
+    }
+}
+
+/// Walking back through segments replayed from their checkpoints, past the list's rebuilds,
+/// each state's pairs are read from the list the run read them from (built where the run's
+/// was): the backward pass is the transpose of the run's own arithmetic, not of a list that
+/// merely holds the same pairs.
+#[test]
+fn the_backward_pass_reads_each_state_from_the_runs_own_list() {
+    let scene = compile(&liquid("lj")).unwrap();
+    let objective = Objective::parse("energy@end", &scene).unwrap();
+    let run =
+        Run::new(&Request { scene: &scene, objective: &objective, wrt: &[], threads: 1, progress: None }).unwrap();
+    let (g, segment) = (&run.graph, 8);
+    let mut s = run.start();
+    let mut st = Stepper::new(Integrator::VelocityVerlet, scene.solver.settings, g, &s).unwrap();
+    let (mut read, mut checkpoints) = (vec![g.lists_built_at()], vec![]);
+    while s.step < run.steps {
+        if s.step.is_multiple_of(segment) {
+            checkpoints.push(Checkpoint { state: s.clone(), at: st.evaluated().clone(), lists: g.keep() });
+        }
+        st.step(g, &mut s, run.dt).unwrap();
+        read.push(g.lists_built_at());
+    }
+    let lists = 1 + read.windows(2).filter(|w| w[0] != w[1]).count();
+    assert!(lists >= 4, "the run rebuilds its list inside segments: {lists} lists");
+    let mut replayed = Replayed { states: vec![], checkpoint: None, built: vec![], current: None.into() };
+    for step in (0..=run.steps).rev() {
+        replayed.go_to(&run, &checkpoints, segment, step).unwrap();
+        assert!(
+            g.lists_built_at() == read[step as usize],
+            "step {step}: the graph holds a list the run did not read there"
+        );
     }
 }
 
