@@ -202,18 +202,26 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
     /// of g; without, the gradient of the energy.
     fn listed_pullback(&self, l: &Neighbours, g: Option<&[[f64; 3]]>, each: &[PairDerivative], out: &mut Adjoint) {
         let (pieces, potential) = (&l.pieces, g.is_none());
-        // g by cluster, as the kernel reads positions (zeros in empty slots)
+        // g by cluster, as the kernel reads positions (zeros in empty slots): on the pool where
+        // the bodies are many (each cluster its own, the same values on any count), since at
+        // every step of a gradient's backward pass this gather was its serial part
         let g: Vec<Cluster> = match g {
             None => vec![],
-            Some(g) => (0..l.clusters())
-                .map(|c| {
+            Some(g) => {
+                let one = |c: usize| -> Cluster {
                     let at = |a: usize, k: usize| match l.bodies[LANES * c + a] {
                         EMPTY => 0.0,
                         b => g[b as usize][k],
                     };
                     std::array::from_fn(|k| F64x4::new(std::array::from_fn(|a| at(a, k))))
+                };
+                let spreads = g.len() >= SPREAD_FROM;
+                spread::pass_if(spreads, || match self.pool.as_deref().filter(|_| spreads) {
+                    Some(pool) => pool
+                        .install(|| (0..l.clusters()).into_par_iter().with_min_len(BLOCK / LANES).map(one).collect()),
+                    None => (0..l.clusters()).map(one).collect(),
                 })
-                .collect(),
+            }
         };
         let wanted: Vec<Vec<usize>> =
             each.iter().map(|pd| pd.which().iter().copied().filter(|&w| w < pd.p.len()).collect()).collect();
