@@ -64,7 +64,7 @@ fn of_scene(cert: &PathBuf, scene: &PathBuf, set: &[String]) -> Result<(), Strin
     lagra_lang::params::apply_settings(&mut s, set)?;
     // `@expect noether` stands for the claims the derived table gives
     crate::noether::apply(&mut s, &path, &source);
-    if s.model != c.model {
+    if *s.model != c.model {
         return Err("the certified model is not the one the source compiles to".into());
     }
     if s.claims != c.claims {

@@ -335,7 +335,7 @@ pub fn main(a: Args) -> ExitCode {
             arithmetic: certificate::ARITHMETIC.into(),
             scene: scene.name.clone(),
             source_digest: digest.clone(),
-            model: scene.model.clone(),
+            model: (*scene.model).clone(),
             claims: scene.claims.clone(),
             run: certificate::Run {
                 integrator: scene.solver.integrator.name().into(),

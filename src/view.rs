@@ -171,7 +171,7 @@ pub fn page(trace: &str, name: &str, scene: Option<&Scene>, cert: Option<&Certif
         return Err(format!("{name} holds no frame"));
     }
     let n = frames[0].0.x.len();
-    let model: Option<&Model> = scene.map(|s| &s.model).or(cert.map(|c| &c.model));
+    let model: Option<&Model> = scene.map(|s| &*s.model).or(cert.map(|c| &c.model));
     if let Some(m) = model.filter(|m| m.bodies.len() != n) {
         return Err(format!("the trace has {n} bodies, the scene {}", m.bodies.len()));
     }

@@ -72,12 +72,13 @@ impl Solids {
     /// None when nothing can touch and nothing is pinned: no floor, no joint and fewer than two
     /// solids.
     pub fn of(model: &Model) -> Option<Solids> {
-        let solids: Vec<Option<Solid>> =
-            model.bodies.iter().map(|b| b.solid.map(|s| Solid { extent: s.extent, friction: s.friction })).collect();
-        let count = solids.iter().flatten().count();
+        // (counted before anything is allocated: a liquid of 256,000 atoms has no solid)
+        let count = model.bodies.iter().filter(|b| b.solid.is_some()).count();
         if model.floor.is_none() && model.pins.is_empty() && count < 2 {
             return None;
         }
+        let solids: Vec<Option<Solid>> =
+            model.bodies.iter().map(|b| b.solid.map(|s| Solid { extent: s.extent, friction: s.friction })).collect();
         let smallest = solids.iter().flatten().map(|s| least(&s.extent)).fold(f64::INFINITY, f64::min);
         let margin = if smallest.is_finite() { 0.02 * smallest } else { 1e-3 };
         Some(Solids { solids, floor: model.floor, pins: model.pins.clone(), margin })

@@ -382,7 +382,7 @@ mod tests {
         let scene = liquid(11);
         let mut s = crate::setup::start(&scene);
         s.x.iter_mut().zip(&s.v).for_each(|(x, v)| (0..3).for_each(|c| x[c] += 0.02 * v[c] - 40.0));
-        (scene.model, s)
+        (Arc::unwrap_or_clone(scene.model), s)
     }
 
     /// A step spreads where its pair list is cut into pieces (5,324 atoms), not on a handful of

@@ -397,7 +397,7 @@ impl<'a> Compiler<'a> {
             name,
             description: self.description,
             domain: self.domain,
-            model,
+            model: model.into(),
             x0: self.x0,
             v0: self.v0,
             spin0: self.spin0,

@@ -10,6 +10,7 @@
 
 use crate::scene::Scene;
 use lagra_checker::terms::Kind;
+use std::sync::Arc;
 
 /// One scalar of the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,11 +52,13 @@ impl Param {
         if !value.is_finite() {
             return Err(format!("{value} is not a finite number"));
         }
+        // (the model is copied first only where a run or another scene still shares it)
+        let model = Arc::make_mut(&mut scene.model);
         match self {
-            Param::Term { term, index } => scene.model.terms[term].params[index] = value,
+            Param::Term { term, index } => model.terms[term].params[index] = value,
             Param::Mass(_) if value <= 0.0 => return Err(format!("a mass must be positive, got {value}")),
-            Param::Mass(i) => scene.model.bodies[i].mass = value,
-            Param::Charge(i) => scene.model.bodies[i].charge = value,
+            Param::Mass(i) => model.bodies[i].mass = value,
+            Param::Charge(i) => model.bodies[i].charge = value,
             Param::Position(i, c) => scene.x0[i][c] = value,
             Param::Velocity(i, c) => scene.v0[i][c] = value,
         }
@@ -229,6 +232,22 @@ mod tests {
             assert_eq!(parse(spelling, &s).unwrap_err(), message);
         }
         assert!(parse_list("trap.k,trap.k", &s).unwrap_err().contains("named twice"));
+    }
+
+    /// A scene's model is shared with its runs (`Arc`): a parameter set in one copy of a scene
+    /// changes that copy alone, its model copied at the first change and not before.
+    #[test]
+    fn a_setting_changes_its_own_scene_and_no_other() {
+        let mut s = scene();
+        let before = s.clone();
+        assert!(Arc::ptr_eq(&s.model, &before.model));
+        Param::Term { term: 2, index: 0 }.set(&mut s, 2.5).unwrap();
+        Param::Mass(1).set(&mut s, 3.0).unwrap();
+        assert_eq!((s.model.terms[2].params[0], s.model.bodies[1].mass), (2.5, 3.0));
+        assert_eq!((before.model.terms[2].params[0], before.model.bodies[1].mass), (4.0, 2.0));
+        let alone = Arc::as_ptr(&s.model);
+        Param::Charge(1).set(&mut s, -1.0).unwrap();
+        assert_eq!(Arc::as_ptr(&s.model), alone, "a model no one shares is changed in place");
     }
 
     #[test]

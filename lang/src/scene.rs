@@ -8,6 +8,7 @@ use crate::prediction::Prediction;
 use crate::thermostat::{Bath, Thermostat};
 use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct Solver {
@@ -55,7 +56,8 @@ pub struct Scene {
     pub description: Option<String>,
     /// The physics domain named by `uses` (recorded, not interpreted).
     pub domain: Option<String>,
-    pub model: Model,
+    /// Shared (`Arc`) with the checker's monitor of a run, which reads it and never changes it.
+    pub model: Arc<Model>,
     pub x0: Vec<[f64; 3]>,
     pub v0: Vec<[f64; 3]>,
     /// Each rigid body's initial orientation and angular momentum (`State::spin`).

@@ -333,7 +333,7 @@ mod virial {
         st.advance_to(&g, &mut s, 0.005, 50).unwrap();
         let w = g.virial(&s).unwrap().unwrap();
         let energy = |l: f64| {
-            let mut model = scene.model.clone();
+            let mut model = (*scene.model).clone();
             let cell = model.cell.as_mut().unwrap();
             cell.size = cell.size.map(|c| c * l);
             let g = LagrangianGraph::new(&model);

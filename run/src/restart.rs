@@ -103,7 +103,7 @@ impl Restart {
 /// The FNV-1a digest of a scene as set up to run: its canonical model and claims, integrator
 /// and time step (what a restart must be resumed with).
 pub fn setup_of(scene: &Scene) -> String {
-    let setup = (&scene.model, &scene.claims, scene.solver.integrator.name(), scene.solver.dt.to_bits());
+    let setup = (&*scene.model, &scene.claims, scene.solver.integrator.name(), scene.solver.dt.to_bits());
     let json = serde_json::to_vec(&setup).expect("a model is plain data");
     label(Fnv::of(&json))
 }

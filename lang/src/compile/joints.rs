@@ -77,6 +77,10 @@ impl<'a> Compiler<'a> {
     /// must exist, be a solid, and start with the anchor within its reach (so that the scene
     /// starts joined where it says).
     pub(super) fn pins(&self) -> Result<Vec<Pin>, Diagnostic> {
+        // (a scene of many bodies and no joint walks none of them)
+        if self.joints.is_empty() {
+            return Ok(vec![]);
+        }
         let mut spin_of = vec![None; self.bodies.len()];
         let mut rigid = 0;
         for (i, b) in self.bodies.iter().enumerate() {

@@ -51,6 +51,7 @@ use lagra_kernel::thermostat::{chain_half, langevin_bath};
 use lagra_lang::integrator::Integrator;
 use lagra_lang::scene::Scene;
 use lagra_lang::thermostat::Thermostat;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The skin beyond the reach, as a fraction of it (the kernel's lists use the same).
@@ -116,7 +117,7 @@ pub struct Domain<E: Exchange> {
     /// The scene's model without its bodies, and the whole scene's: the local graph's bodies
     /// are the owned atoms' and the ghosts'.
     model: Model,
-    whole: Model,
+    whole: Arc<Model>,
     /// The local graph's model (for the checker's part), and the numbers of its bonded
     /// instances among the whole's.
     local_model: Model,
@@ -199,7 +200,18 @@ impl<E: Exchange> Domain<E> {
         fits(scene)?;
         // the pair terms are every rank's; the bonded ones each rank's own (`Bonded::local`)
         let pairs = scene.model.terms.iter().filter(|t| t.sites.is_empty()).cloned().collect();
-        let model = Model { bodies: vec![], terms: pairs, ..scene.model.clone() };
+        // (the rest of the scene's model field by field: its bodies are not copied to be dropped)
+        let m = &scene.model;
+        let model = Model {
+            units: m.units,
+            cell: m.cell,
+            bodies: vec![],
+            terms: pairs,
+            constraints: m.constraints.clone(),
+            thermostat: m.thermostat.clone(),
+            floor: m.floor,
+            pins: m.pins.clone(),
+        };
         let bonded = Bonded::of(&scene.model, &s.x);
         let bath = match (&scene.thermostat, &scene.model.thermostat) {
             (Some(Thermostat::NoseHoover { .. }), Some(chain)) => Bath::Chain(chain.clone()),

@@ -40,7 +40,7 @@ fn bonded_liquid(steps: u64, k: f64) -> Scene {
             sites: vec![b, a, d],
             params: vec![2.0, std::f64::consts::FRAC_PI_3],
         };
-        scene.model.terms.extend([bond, angle]);
+        Arc::make_mut(&mut scene.model).terms.extend([bond, angle]);
     }
     scene
 }
@@ -142,7 +142,7 @@ fn what_the_domains_do_not_carry_is_said() {
     assert!(fits(&open).unwrap_err().contains("no box periodic"));
     let with = |kind, sites: Vec<usize>, params: Vec<f64>| {
         let mut scene = liquid(10);
-        scene.model.terms.push(lagra_checker::model::TermInstance { kind, sites, params });
+        Arc::make_mut(&mut scene.model).terms.push(lagra_checker::model::TermInstance { kind, sites, params });
         fits(&scene)
     };
     use lagra_checker::terms::Kind;
@@ -217,7 +217,7 @@ fn bonds_and_angles_across_bricks_follow_the_one_process_run_to_round_off() {
 fn a_bond_stretched_beyond_the_halo_stops_every_rank_with_its_atoms_named() {
     // a bond whose rest length is ten times its length at the start pushes its atoms apart
     let mut scene = bonded_liquid(200, 50.0);
-    scene.model.terms.push(lagra_checker::model::TermInstance {
+    Arc::make_mut(&mut scene.model).terms.push(lagra_checker::model::TermInstance {
         kind: lagra_checker::terms::Kind::HarmonicBond,
         sites: vec![0, 1],
         params: vec![100.0, 11.88, 0.0],
