@@ -2,6 +2,7 @@
 //! differences' own error), on scenes of every kind of term, through neighbour-list rebuilds,
 //! and on random small scenes.
 
+use super::reverse::{Checkpoint, Replayed};
 use super::*;
 use crate::compile;
 use lagra_lang::params;
