@@ -46,7 +46,7 @@ use crate::state::State;
 use block::Block;
 use colours::Rows;
 use contact::{Bound, Contact};
-use islands::{Island, Islands};
+use islands::{Island, Islands, Whole};
 use lagra_checker::model::Pin;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
 use rayon::prelude::*;
@@ -118,20 +118,19 @@ impl Solver for Avbd {
             (found, islands)
         };
         let ((found, islands), mut bodies) = beside(g.pool(), search, || self.bodies(g, s, &start, dt));
-        self.paths.last = Some((islands.len(), islands.each().map(|i| i.bodies.len()).max().unwrap_or(0)));
+        self.paths.last = Some((islands.len(), islands.sizes().max().unwrap_or(0)));
         let solved: Vec<Solved> = match g.pool() {
             Some(pool) if !shares(&islands, pool.current_num_threads()) => {
                 self.paths.colours += 1;
-                let (all, pins): (Vec<usize>, _) = ((0..bodies.len()).collect(), self.pins());
-                let whole = Island { bodies: &all, touches: &found, pins: &pins };
-                vec![pool.install(|| self.solve(whole, &bodies, &start, Some(pool)))]
+                let whole = Whole::of(bodies.len(), found.len(), self.pins());
+                vec![pool.install(|| self.solve(whole.island(&found), &bodies, &start, Some(pool)))]
             }
             pool => {
                 match pool {
                     Some(_) => self.paths.islands += 1,
                     None => self.paths.alone += 1,
                 }
-                spread::share(pool, islands.len(), 1, |k| self.solve(islands.get(k), &bodies, &start, None))
+                spread::share(pool, islands.len(), 1, |k| self.solve(islands.get(k, &found), &bodies, &start, None))
             }
         };
         // a body in no contact makes its inertial move: exact in one Newton step, not swept
@@ -266,8 +265,8 @@ fn beside<A: Send, B: Send>(
 /// Whether `threads` threads have islands enough to take one at a time: at least one each, and
 /// the largest no more than a thread's share of the bodies in islands.
 fn shares(islands: &Islands, threads: usize) -> bool {
-    let largest = islands.each().map(|i| i.bodies.len()).max().unwrap_or(0);
-    let held: usize = islands.each().map(|i| i.bodies.len()).sum();
+    let largest = islands.sizes().max().unwrap_or(0);
+    let held: usize = islands.sizes().sum();
     islands.len() >= threads && largest * threads <= held
 }
 
@@ -281,8 +280,7 @@ impl Avbd {
         let margin = self.solids.margin.max(f64::MIN_POSITIVE);
         let poses: Vec<Pose> = island.bodies.iter().map(|&i| start[i]).collect();
         let mut bodies: Vec<Body> = island.bodies.iter().map(|&i| all[i]).collect();
-        let mut contacts: Vec<Contact> =
-            island.touches.iter().map(|t| Contact::new(t, &poses, &bodies, margin)).collect();
+        let mut contacts: Vec<Contact> = island.touches().map(|t| Contact::new(&t, &poses, &bodies, margin)).collect();
         for (j, p) in island.pins {
             let mut c = Contact::pin(*j, p, &poses, &bodies, margin);
             if let Some((_, lambda, stiffness)) = self.warm.pin(*j) {

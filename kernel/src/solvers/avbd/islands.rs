@@ -6,23 +6,63 @@
 use crate::contact::Touch;
 use lagra_checker::model::Pin;
 
-/// One island, borrowed: its bodies' indices in the state, in order; the touches and pins among
-/// them with their bodies renumbered into that list (in the order they were found); each pin's
-/// index in the scene (its warm start's key).
+/// One island, borrowed: its bodies' indices in the state, in order; the touches among them
+/// (their places in the step's list `found`, in the order they were found) and the pins, with
+/// their bodies renumbered into that list (`local`); each pin's index in the scene (its warm
+/// start's key). Places and local numbers are `u32`: a step's touches and bodies number far
+/// below 2³² (a body's state alone takes a kilobyte).
 #[derive(Clone, Copy)]
 pub struct Island<'a> {
     pub bodies: &'a [usize],
-    pub touches: &'a [Touch],
+    found: &'a [Touch],
+    which: &'a [u32],
+    local: &'a [u32],
     pub pins: &'a [(usize, Pin)],
 }
 
-/// Every island of a step, laid out flat: island k's bodies, touches and pins are the k-th runs
-/// of three lists (a counting sort), so splitting a step allocates a few lists, not three an
-/// island (the 1,000-block stack's hundred islands made that a third of its serial time).
+impl<'a> Island<'a> {
+    /// Its touches, their bodies numbered within the island: renumbered as they are read, in
+    /// the island's own task, where the split copied them out on one thread (on the 1,000-block
+    /// stack 8,000 touches, 700 kB a step, a third of the split).
+    pub fn touches(&self) -> impl ExactSizeIterator<Item = Touch> + 'a {
+        let (found, local) = (self.found, self.local);
+        self.which.iter().map(move |&s| {
+            let t = &found[s as usize];
+            Touch { a: t.a.map(|a| local[a] as usize), b: local[t.b] as usize, ..*t }
+        })
+    }
+}
+
+/// The whole scene as one island: every body, touch and pin, numbered as in the state.
+pub struct Whole {
+    bodies: Vec<usize>,
+    local: Vec<u32>,
+    which: Vec<u32>,
+    pins: Vec<(usize, Pin)>,
+}
+
+impl Whole {
+    pub fn of(n: usize, touches: usize, pins: Vec<(usize, Pin)>) -> Whole {
+        let which = (0..touches as u32).collect();
+        Whole { bodies: (0..n).collect(), local: (0..n as u32).collect(), which, pins }
+    }
+
+    /// The island, its touches those of `found` (as many as `of` was told).
+    pub fn island<'a>(&'a self, found: &'a [Touch]) -> Island<'a> {
+        Island { bodies: &self.bodies, found, which: &self.which, local: &self.local, pins: &self.pins }
+    }
+}
+
+/// Every island of a step, laid out flat: island k's bodies, touches (their places in the
+/// step's list) and pins are the k-th runs of three lists (a counting sort), so splitting a step
+/// allocates a few lists, not three an island (the 1,000-block stack's hundred islands made that
+/// a third of its serial time).
 pub struct Islands {
     bodies: Vec<usize>,
-    touches: Vec<Touch>,
+    touches: Vec<u32>,
     pins: Vec<(usize, Pin)>,
+    /// A body's place within its island.
+    local: Vec<u32>,
     /// Where island k's runs start in the three lists; one more entry, the lists' lengths.
     starts: Vec<[usize; 3]>,
 }
@@ -34,13 +74,16 @@ impl Islands {
         let mut root: Vec<usize> = (0..n).collect();
         let mut joined = vec![false; n];
         let links = touches.iter().map(|t| (t.a, t.b)).chain(pins.iter().map(|p| (p.a, p.b)));
+        let mut last = None;
         for (a, b) in links {
             joined[b] = true;
-            if let Some(a) = a {
+            // a pair's touches come one after another (up to four for two boxes): joined once
+            if let Some(a) = a.filter(|_| last != Some((a, b))) {
                 joined[a] = true;
                 let (ra, rb) = (find(&mut root, a), find(&mut root, b));
                 root[ra.max(rb)] = ra.min(rb);
             }
+            last = Some((a, b));
         }
         // each island's root is its lowest body, so numbering the roots in order numbers the
         // islands by their first body; `local` is a body's place within its island
@@ -54,7 +97,7 @@ impl Islands {
                 counts.push([0; 3]);
             }
             island[i] = island[r];
-            local[i] = counts[island[i]][0];
+            local[i] = counts[island[i]][0] as u32;
             counts[island[i]][0] += 1;
         }
         touches.iter().for_each(|t| counts[island[t.b]][1] += 1);
@@ -71,42 +114,42 @@ impl Islands {
         let mut next: Vec<[usize; 3]> = starts.clone();
         let mut bodies = vec![0; at[0]];
         for i in (0..n).filter(|&i| joined[i]) {
-            bodies[starts[island[i]][0] + local[i]] = i;
+            bodies[starts[island[i]][0] + local[i] as usize] = i;
         }
         let mut from = vec![0; at[1]];
         for (s, t) in touches.iter().enumerate() {
             let k = island[t.b];
-            from[next[k][1]] = s;
+            from[next[k][1]] = s as u32;
             next[k][1] += 1;
         }
-        let touches = from
-            .iter()
-            .map(|&s| Touch { a: touches[s].a.map(|a| local[a]), b: local[touches[s].b], ..touches[s] })
-            .collect();
-        let mut from = vec![0; at[2]];
+        let mut picked = vec![0; at[2]];
         for (j, p) in pins.iter().enumerate() {
             let k = island[p.b];
-            from[next[k][2]] = j;
+            picked[next[k][2]] = j;
             next[k][2] += 1;
         }
-        let pins =
-            from.iter().map(|&j| (j, Pin { a: pins[j].a.map(|a| local[a]), b: local[pins[j].b], ..pins[j] })).collect();
-        Islands { bodies, touches, pins, starts }
+        let local_of = |b: usize| local[b] as usize;
+        let pins = picked
+            .iter()
+            .map(|&j| (j, Pin { a: pins[j].a.map(local_of), b: local_of(pins[j].b), ..pins[j] }))
+            .collect();
+        Islands { bodies, touches: from, pins, local, starts }
     }
 
     pub fn len(&self) -> usize {
         self.starts.len() - 1
     }
 
-    /// Island k.
-    pub fn get(&self, k: usize) -> Island<'_> {
+    /// Island k of the step whose touches were `found` (the list the islands were split from).
+    pub fn get<'a>(&'a self, k: usize, found: &'a [Touch]) -> Island<'a> {
         let ([b0, t0, p0], [b1, t1, p1]) = (self.starts[k], self.starts[k + 1]);
-        Island { bodies: &self.bodies[b0..b1], touches: &self.touches[t0..t1], pins: &self.pins[p0..p1] }
+        let (which, local) = (&self.touches[t0..t1], &self.local[..]);
+        Island { bodies: &self.bodies[b0..b1], found, which, local, pins: &self.pins[p0..p1] }
     }
 
-    /// The islands in order.
-    pub fn each(&self) -> impl ExactSizeIterator<Item = Island<'_>> {
-        (0..self.len()).map(|k| self.get(k))
+    /// The islands' sizes in bodies, in order.
+    pub fn sizes(&self) -> impl ExactSizeIterator<Item = usize> + '_ {
+        self.starts.windows(2).map(|w| w[1][0] - w[0][0])
     }
 }
 
@@ -134,11 +177,11 @@ mod tests {
     fn contacts_and_pins_between_bodies_join_islands_and_the_floor_does_not() {
         let touches = [touch(None, 0), touch(None, 1), touch(Some(1), 3), touch(Some(0), 2)];
         let pins = [Pin { a: Some(4), b: 5, on_a: [0.0; 3], on_b: [0.0; 3] }];
-        let islands = Islands::of(&touches, &pins, 7);
-        let islands: Vec<Island> = islands.each().collect();
+        let split = Islands::of(&touches, &pins, 7);
+        let islands: Vec<Island> = (0..split.len()).map(|k| split.get(k, &touches)).collect();
         let bodies: Vec<_> = islands.iter().map(|i| i.bodies.to_vec()).collect();
         assert_eq!(bodies, vec![vec![0, 2], vec![1, 3], vec![4, 5]]);
-        let pairs = |i: &Island| i.touches.iter().map(|t| (t.a, t.b)).collect::<Vec<_>>();
+        let pairs = |i: &Island| i.touches().map(|t| (t.a, t.b)).collect::<Vec<_>>();
         assert_eq!(pairs(&islands[0]), vec![(None, 0), (Some(0), 1)]);
         assert_eq!(pairs(&islands[1]), vec![(None, 0), (Some(0), 1)]);
         assert_eq!(islands[2].pins, vec![(0, Pin { a: Some(0), b: 1, on_a: [0.0; 3], on_b: [0.0; 3] })]);
@@ -149,11 +192,33 @@ mod tests {
     #[test]
     fn a_chain_found_out_of_order_is_one_island() {
         let touches = [touch(Some(1), 3), touch(None, 0), touch(Some(1), 2)];
-        let islands = Islands::of(&touches, &[], 4);
-        let islands: Vec<Island> = islands.each().collect();
+        let split = Islands::of(&touches, &[], 4);
+        let islands: Vec<Island> = (0..split.len()).map(|k| split.get(k, &touches)).collect();
         let bodies: Vec<_> = islands.iter().map(|i| i.bodies.to_vec()).collect();
         assert_eq!(bodies, vec![vec![0], vec![1, 2, 3]]);
-        let pairs: Vec<_> = islands[1].touches.iter().map(|t| (t.a, t.b)).collect();
+        let pairs: Vec<_> = islands[1].touches().map(|t| (t.a, t.b)).collect();
         assert_eq!(pairs, vec![(Some(0), 2), (Some(0), 1)]);
+    }
+
+    /// A pair's touches side by side (joined once), the same pair again after another, and the
+    /// whole scene as one island: every touch kept, in order, numbered as the islands say.
+    #[test]
+    fn a_pairs_touches_are_joined_once_and_all_kept() {
+        let touches = [
+            touch(Some(1), 3),
+            touch(Some(1), 3),
+            touch(None, 0),
+            touch(Some(1), 3),
+            touch(Some(0), 2),
+            touch(None, 2),
+        ];
+        let split = Islands::of(&touches, &[], 5);
+        assert_eq!(split.sizes().collect::<Vec<_>>(), vec![2, 2]);
+        let pairs = |i: Island| i.touches().map(|t| (t.a, t.b)).collect::<Vec<_>>();
+        assert_eq!(pairs(split.get(0, &touches)), vec![(None, 0), (Some(0), 1), (None, 1)]);
+        assert_eq!(pairs(split.get(1, &touches)), vec![(Some(0), 1); 3]);
+        let whole = Whole::of(5, touches.len(), vec![]);
+        let all: Vec<_> = whole.island(&touches).touches().map(|t| (t.a, t.b)).collect();
+        assert_eq!(all, touches.iter().map(|t| (t.a, t.b)).collect::<Vec<_>>());
     }
 }
