@@ -16,7 +16,7 @@ trap 'rm -f "$report"' EXIT
 for _ in $(seq "$rounds"); do
   for b in "$@"; do
     start=$(date +%s%N)
-    "$b" run "$scene" --threads 1 --steps 1 --quiet --json > "$report" || [ $? -eq 1 ]
+    "$b" run "$scene" --threads "${THREADS:-1}" --steps 1 --quiet --json > "$report" || [ $? -eq 1 ]
     end=$(date +%s%N)
     python3 -c "import json, sys; print(sys.argv[1], ($end - $start) / 1e9 - json.load(open(sys.argv[2]))['wall_s'])" "$b" "$report"
   done

@@ -8,10 +8,12 @@ use lagra_checker::checksum::label;
 use lagra_checker::decision::Verdict;
 use lagra_checker::model::Snapshot;
 use lagra_checker::states::StateWriter;
+use lagra_kernel::forces::Pool;
+use lagra_kernel::graph::threads_of;
 use lagra_lang::integrator::Integrator;
 use lagra_lang::scene::Scene;
 use lagra_noether::Analysis;
-use lagra_run::compile;
+use lagra_run::compile_on;
 use lagra_run::marks::{self, OnDisk, Spill};
 use lagra_run::restart::Restart;
 use lagra_run::run::{run, Options, Report, Restarts, Stop};
@@ -21,7 +23,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -147,7 +149,18 @@ pub struct Prepared {
 /// step, and expands `@expect noether`. The error is the message to show, a located diagnostic
 /// for a scene error.
 pub fn prepare(source: &str, path: &str, set: &[String], dt: Option<f64>) -> Result<Prepared, String> {
-    let mut scene = compile(source).map_err(|d| d.render(path, source).to_string())?;
+    prepare_on(source, path, set, dt, &|_| None)
+}
+
+/// [`prepare`], a large lattice laid out on the threads `threads` gives (`lagra_lang::compile_on`).
+pub fn prepare_on<'a>(
+    source: &'a str,
+    path: &str,
+    set: &[String],
+    dt: Option<f64>,
+    threads: lagra_lang::Threads<'a>,
+) -> Result<Prepared, String> {
+    let mut scene = compile_on(source, threads).map_err(|d| d.render(path, source).to_string())?;
     lagra_lang::params::apply_settings(&mut scene, set)?;
     if let Some(dt) = dt {
         if !(dt > 0.0 && dt.is_finite()) {
@@ -158,6 +171,16 @@ pub fn prepare(source: &str, path: &str, set: &[String], dt: Option<f64>) -> Res
     let (analysis, mut warnings, generated) = noether::apply(&mut scene, path, source);
     warnings.extend(fluid::warnings(&scene, path, source));
     Ok(Prepared { scene, analysis, warnings, generated })
+}
+
+/// The threads each of `ranks` ranks (`here` of them on this machine) takes for its share of
+/// `bodies` bodies: `asked`, or by default its share of this machine's cores.
+fn threads_here(bodies: usize, ranks: usize, here: usize, asked: Option<usize>) -> Result<usize, String> {
+    match lagra_run::run::threads_for(bodies / ranks, asked)? {
+        // ranks on one machine share its cores
+        t if asked.is_none() => Ok((t / here).max(1)),
+        t => Ok(t),
+    }
 }
 
 /// The report of a finished run, with what Noether says of each failed claim.
@@ -188,7 +211,15 @@ pub fn main(a: Args) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(e),
     };
-    let prepared = match prepare(&source, &path, &a.set, a.dt) {
+    // the run's threads, started where a large lattice asks for them at the compile (its bodies
+    // laid out on them) and handed on to the run; else the run starts its own
+    let (ranks, here) = (world.size, world.here());
+    let started: OnceLock<Pool> = OnceLock::new();
+    let lattice_threads = |bodies: usize| {
+        let start = || threads_here(bodies, ranks, here, a.threads).ok().and_then(|t| threads_of(t).ok()).flatten();
+        started.get_or_init(start).as_deref()
+    };
+    let prepared = match prepare_on(&source, &path, &a.set, a.dt, &lattice_threads) {
         Ok(p) => p,
         Err(e) if e.contains('\n') => {
             if root {
@@ -199,9 +230,7 @@ pub fn main(a: Args) -> ExitCode {
         Err(e) => return fail(e),
     };
     let scene = &prepared.scene;
-    let threads = match lagra_run::run::threads_for(scene.model.bodies.len() / world.size, a.threads) {
-        // ranks on one machine share its cores
-        Ok(t) if a.threads.is_none() => (t / world.here()).max(1),
+    let threads = match threads_here(scene.model.bodies.len(), ranks, here, a.threads) {
         Ok(t) => t,
         Err(e) => return fail(e),
     };
@@ -292,6 +321,7 @@ pub fn main(a: Args) -> ExitCode {
             trace: tracing.then_some(&mut both as &mut dyn Frames),
             record: a.states.is_some().then_some(&mut record),
             threads,
+            pool: started.get().cloned().flatten(),
             progress: shown.then_some(&mut tick),
             stop: Some(&*signalled.stop),
             watch: None,

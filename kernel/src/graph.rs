@@ -17,7 +17,7 @@ use crate::spread::SPREAD_FROM;
 use crate::state::State;
 use crate::step::{self, Stride};
 use crate::sum::Sum;
-use lagra_checker::model::Model;
+use lagra_checker::model::{Body, Model};
 use lagra_checker::terms::Kind;
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -58,6 +58,13 @@ pub fn threads_of(threads: usize) -> Result<Pool, String> {
     })
 }
 
+/// `f` of each body, in order: on the pool's threads for a model of `SPREAD_FROM` bodies or
+/// more, where the arrays' fresh memory is first touched there too.
+fn per_body<U: Send>(pool: &Pool, model: &Model, f: impl Fn(&Body) -> U + Sync + Send) -> Vec<U> {
+    let n = model.bodies.len();
+    crate::spread::each(pool.as_deref().filter(|_| n >= SPREAD_FROM), n, |i| f(&model.bodies[i]))
+}
+
 /// Which forces an evaluation adds up.
 #[derive(Clone, Copy, PartialEq)]
 enum Which {
@@ -86,14 +93,14 @@ impl LagrangianGraph {
                 groups.push((kind, group(kind, &instances, model, &pool)));
             }
         }
-        let masses = model.bodies.iter().map(|b| b.mass).collect();
-        let charges = model.bodies.iter().map(|b| b.charge).collect();
-        let inverse_masses = model.bodies.iter().map(|b| 1.0 / b.mass).collect();
+        let masses = per_body(&pool, model, |b| b.mass);
+        let charges = per_body(&pool, model, |b| b.charge);
+        let inverse_masses = per_body(&pool, model, |b| 1.0 / b.mass);
         let velocity_dependent = groups.iter().any(|g| g.1.velocity_dependent());
-        let colours = model.bodies.iter().map(|b| b.colour).collect();
+        let colours = per_body(&pool, model, |b| b.colour);
         let constraints = Constraints::of(model);
         let moments = model.rigid().map(Vector3::from).collect();
-        let rigid = model.bodies.iter().map(|b| b.moments.is_some()).collect();
+        let rigid = per_body(&pool, model, |b| b.moments.is_some());
         LagrangianGraph {
             masses,
             inverse_masses,

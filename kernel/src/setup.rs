@@ -5,16 +5,21 @@
 use crate::constraints::{Constraints, Tolerance};
 use crate::contact::Solids;
 use crate::state::State;
-use lagra_lang::{Diagnostic, Scene};
+use lagra_lang::{Diagnostic, Scene, Threads};
 
 /// The state the run starts from: step 0, the initial positions and velocities, a thermostat
 /// chain at rest.
 pub fn start(scene: &Scene) -> State {
+    start_on(scene, None)
+}
+
+/// [`start`], a large scene's positions and velocities copied on `pool`'s threads.
+pub fn start_on(scene: &Scene, pool: Option<&rayon::ThreadPool>) -> State {
     State {
         step: 0,
         t: 0.0,
-        x: scene.x0.clone(),
-        v: scene.v0.clone(),
+        x: crate::spread::copied(pool, &scene.x0),
+        v: crate::spread::copied(pool, &scene.v0),
         chain: vec![[0.0; 2]; scene.model.links()],
         spin: scene.spin0.clone(),
     }
@@ -22,7 +27,13 @@ pub fn start(scene: &Scene) -> State {
 
 /// Compiles a scene (`lagra_lang::compile`) and places its initial state (`place`).
 pub fn compile(source: &str) -> Result<Scene, Diagnostic> {
-    let mut scene = lagra_lang::compile(source)?;
+    compile_on(source, &|_| None)
+}
+
+/// [`compile`], a large lattice laid out on the threads `threads` gives
+/// (`lagra_lang::compile_on`).
+pub fn compile_on<'a>(source: &'a str, threads: Threads<'a>) -> Result<Scene, Diagnostic> {
+    let mut scene = lagra_lang::compile_on(source, threads)?;
     place(&mut scene)?;
     Ok(scene)
 }

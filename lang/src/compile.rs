@@ -6,7 +6,7 @@ use crate::diagnostic::{Diagnostic, Span};
 use crate::prediction::{Prediction, PredictionKind};
 use crate::scene::{NoetherRequest, Sampling, Scene, Spans};
 use crate::thermostat::{self, Bath, Thermostat};
-use crate::{Pair, Rule};
+use crate::{Pair, Rule, Threads};
 use lagra_checker::claims::{Claim, ClaimKind};
 use lagra_checker::model::{Body, Cell, Floor, Model, TermInstance, UnitSystem};
 use lagra_checker::terms::{Kind, Shape};
@@ -28,6 +28,8 @@ fn err<T>(span: impl Into<Span>, msg: impl Into<String>) -> Result<T, Diagnostic
 
 struct Compiler<'a> {
     rd: Reader,
+    /// The run's threads, asked for where a large lattice is laid out.
+    threads: Threads<'a>,
     templates: HashMap<&'a str, Block<'a>>,
     bodies: Vec<Body>,
     x0: Vec<[f64; 3]>,
@@ -62,7 +64,7 @@ struct Compiler<'a> {
     solid_at: Vec<Option<Span>>,
 }
 
-pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
+pub fn scene<'a>(pair: Pair<'a>, threads: Threads<'a>) -> Result<Scene, Diagnostic> {
     let scene_span: Span = pair.as_span().into();
     let mut inner = pair.into_inner();
     let name = inner.next().expect("scene name").as_str().to_string();
@@ -82,6 +84,7 @@ pub fn scene(pair: Pair) -> Result<Scene, Diagnostic> {
     }
     let mut c = Compiler {
         rd: Reader { system: system.unwrap_or(UnitSystem::Reduced) },
+        threads,
         templates: HashMap::new(),
         bodies: vec![],
         x0: vec![],

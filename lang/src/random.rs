@@ -19,9 +19,18 @@ fn mix(z: u64) -> u64 {
 /// `libm`, not the platform's maths library, turns it into a normal).
 pub struct SplitMix(pub u64);
 
+/// SplitMix64's step: its state advances by this at every draw.
+const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
+
 impl SplitMix {
+    /// The stream of `seed` after `draws` draws: its state is the seed plus that many steps, so
+    /// any place in the stream is reached at once (a lattice draws each body's alone).
+    pub fn after(seed: u64, draws: u64) -> SplitMix {
+        SplitMix(seed.wrapping_add(draws.wrapping_mul(GAMMA)))
+    }
+
     pub fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.0 = self.0.wrapping_add(GAMMA);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

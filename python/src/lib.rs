@@ -282,6 +282,7 @@ impl PyScene {
                 trace: Some(&mut frames),
                 record: None,
                 threads,
+                pool: None,
                 progress: Some(&mut tick),
                 stop: Some(&stop),
                 watch,

@@ -373,6 +373,25 @@ mod tests {
         assert_eq!(steps, (1..=plain.steps / 7).map(|k| 7 * k).collect::<Vec<_>>());
     }
 
+    /// A pool handed to the run (the compile's) is the one it runs on where it has the threads
+    /// asked for, and is left alone where it has not; the bits are the same either way.
+    #[test]
+    fn a_run_takes_a_pool_of_its_thread_count_and_no_other() {
+        let scene = melt(1e-2);
+        let plain = run(&scene, Options::plain(None)).unwrap();
+        let pool = lagra_kernel::graph::threads_of(3).unwrap().unwrap();
+        // (the graph and its groups each hold it while they run on it)
+        for (threads, used) in [(3, true), (2, false)] {
+            let mut holders = vec![];
+            let mut see = |_: &lagra_kernel::state::State| holders.push(std::sync::Arc::strong_count(&pool));
+            let watch = Some(crate::run::Watch { every: 50, see: &mut see });
+            let on = run(&scene, Options { threads, pool: Some(pool.clone()), watch, ..Options::plain(None) }).unwrap();
+            same(&plain, &on);
+            assert!(!holders.is_empty() && holders.iter().all(|&h| (h > 1) == used), "{threads} threads: {holders:?}");
+        }
+        assert_eq!(std::sync::Arc::strong_count(&pool), 1, "the run let go of it");
+    }
+
     /// Progress stops a two-body run every 2¹⁹ steps (a million atom-steps), and the run ends
     /// with the bits it has without it.
     #[test]

@@ -22,7 +22,13 @@ use tail::Tail;
 /// (`lagra_kernel::setup::compile`), then its tail corrections worked out where it asks for
 /// them. Every error names where the scene wrote it.
 pub fn compile(source: &str) -> Result<Scene, Diagnostic> {
-    let scene = lagra_kernel::setup::compile(source)?;
+    compile_on(source, &|_| None)
+}
+
+/// [`compile`], a large lattice laid out on the threads `threads` gives
+/// (`lagra_lang::compile_on`): the same scene, to the bit.
+pub fn compile_on<'a>(source: &'a str, threads: lagra_lang::Threads<'a>) -> Result<Scene, Diagnostic> {
+    let scene = lagra_kernel::setup::compile_on(source, threads)?;
     if let Some(at) = scene.spans.tail_corrections {
         Tail::of(&scene.model).map_err(|e| Diagnostic::new(at, e))?;
     }

@@ -12,6 +12,7 @@ use lagra_checker::claims::ClaimKind;
 use lagra_checker::model::Snapshot;
 use lagra_checker::monitor::{Halt, MarkSink, Monitor, Outcome};
 use lagra_checker::terms::Kind;
+use lagra_kernel::forces::Pool;
 use lagra_kernel::graph::LagrangianGraph;
 use lagra_kernel::solvers::{Carried, Evaluated, Iterations, Stepper};
 use lagra_kernel::state::{kinetic, State};
@@ -96,6 +97,9 @@ pub struct Options<'a> {
     pub record: Option<Recorder<'a>>,
     /// Threads for the forces (the results are the same bits for any count).
     pub threads: usize,
+    /// A pool of `threads` threads already started (the compile's, for a large lattice), to run
+    /// on in place of one of the run's own.
+    pub pool: Pool,
     /// Called with the step reached about every million atom-steps, for a progress line (the
     /// run's results are the same with or without it).
     pub progress: Option<&'a mut dyn FnMut(u64)>,
@@ -134,6 +138,7 @@ impl Options<'_> {
             trace: None,
             record: None,
             threads: 1,
+            pool: None,
             progress: None,
             stop: None,
             watch: None,
@@ -177,7 +182,10 @@ pub fn threads_for(bodies: usize, asked: Option<usize>) -> Result<usize, String>
 pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let steps = opts.steps.unwrap_or(scene.solver.steps);
     let dt = scene.solver.dt;
-    let graph = LagrangianGraph::with_threads(&scene.model, opts.threads)?;
+    let graph = match opts.pool.take().filter(|p| p.current_num_threads() == opts.threads) {
+        Some(pool) => LagrangianGraph::with_pool(&scene.model, Some(pool)),
+        None => LagrangianGraph::with_threads(&scene.model, opts.threads)?,
+    };
     let (model, claims) = (scene.model.clone(), scene.claims.clone());
     // a restart's state and everything carried with it, or the scene's start
     let (mut state, mut monitor, mut observer, mut meters, carried) = match opts.resume.take() {
@@ -185,7 +193,13 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
             let meters: Vec<(Meter, &Prediction)> =
                 scene.predictions.iter().map(|p| (Meter::new(p, &scene.model, &scene.x0, scene.bath()), p)).collect();
             let observer = Observer::new(scene, &graph, steps)?;
-            (lagra_kernel::setup::start(scene), Monitor::new(model, claims, steps)?, observer, meters, None)
+            (
+                lagra_kernel::setup::start_on(scene, graph.pool()),
+                Monitor::new(model, claims, steps)?,
+                observer,
+                meters,
+                None,
+            )
         }
         Some(r) => {
             let fits = |e: String| format!("the restart does not fit this scene: {e}");

@@ -193,18 +193,23 @@ impl<'a> Compiler<'a> {
                 ),
             );
         }
-        let (x, side) = kind.sites(density, cells);
-        let v = lattice::velocities(x.len(), temperature / body.mass, seed, draw);
+        // a large lattice is laid out on the run's threads, asked for only then
+        let pool = match bodies as usize >= lattice::SPREAD_FROM {
+            true => (self.threads)(bodies as usize),
+            false => None,
+        };
+        let (x, side) = kind.sites(density, cells, pool);
+        let v = lattice::velocities(x.len(), temperature / body.mass, seed, draw, pool);
         self.cell = Some((Cell { size: side, periodic: [true; 3] }, at));
         self.lattice = true;
-        // each list grown once to its length: pushed a body at a time, 256,000 bodies cost ~40 ms
-        // of copies and page faults as the lists doubled (a third of the set-up before step 0)
+        // each list grown once to its length (pushed a body at a time, 256,000 bodies cost ~40 ms
+        // of copies and page faults as the lists doubled), the long ones where they are laid out
         let n = x.len();
-        self.bodies.extend(std::iter::repeat_n(body, n));
-        self.solid_at.extend(std::iter::repeat_n(None, n));
-        self.sizes.extend(std::iter::repeat_n(size, n));
-        self.x0.extend(x);
-        self.v0.extend(v);
+        append(&mut self.bodies, lattice::laid(pool, n, |_| body.clone()));
+        append(&mut self.solid_at, lattice::laid(pool, n, |_| None));
+        append(&mut self.sizes, lattice::laid(pool, n, |_| size));
+        append(&mut self.x0, x);
+        append(&mut self.v0, v);
         Ok(())
     }
 
@@ -233,5 +238,14 @@ impl<'a> Compiler<'a> {
         b.check_names("floor", &names)?;
         self.floor = Some((Floor { y, friction }, at));
         Ok(())
+    }
+}
+
+/// `copies` after what `list` holds: taken whole where it holds nothing, so that its memory stays
+/// where it was first written (on the threads that laid it out).
+fn append<T>(list: &mut Vec<T>, copies: Vec<T>) {
+    match list.is_empty() {
+        true => *list = copies,
+        false => list.extend(copies),
     }
 }

@@ -23,6 +23,27 @@ fn a_lattice_fills_its_own_periodic_box() {
     assert!((c.size[2] - 5.0 * a).abs() < 1e-12, "{:?}", c.size);
 }
 
+/// A compile asks for the run's threads only for a lattice of `SPREAD_FROM` bodies or more,
+/// once, with its bodies; laid out on them, the scene is the same to the bit.
+#[test]
+fn a_large_lattice_asks_for_threads_once_and_is_the_same_on_them() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let asked = AtomicUsize::new(0);
+    let threads = |bodies: usize| {
+        asked.fetch_add(bodies, Ordering::Relaxed);
+        Some(&pool)
+    };
+    let small = crate::compile_on(LATTICE, &threads).unwrap();
+    assert_eq!((asked.load(Ordering::Relaxed), small.x0.len()), (0, 240), "a small lattice asks for none");
+    let large = LATTICE.replace("[3, 4, 5]", "[16, 16, 17]"); // 17,408 bodies
+    let (one, many) = (compile(&large).unwrap(), crate::compile_on(&large, &threads).unwrap());
+    assert_eq!(asked.load(Ordering::Relaxed), 17_408);
+    let bits = |s: &crate::Scene| [&s.x0, &s.v0].map(|xs| xs.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>());
+    assert_eq!(bits(&one), bits(&many));
+    assert_eq!((&one.model.bodies, &one.sizes), (&many.model.bodies, &many.sizes));
+}
+
 #[test]
 fn lattice_errors() {
     assert_eq!(
