@@ -9,7 +9,9 @@ use lagra_checker::claims::Claim;
 use lagra_checker::model::Model;
 use lagra_checker::monitor::{is_balance, next_checkpoint, Halt, Monitor};
 use lagra_checker::quantities::Parts;
+use lagra_kernel::spread;
 use lagra_kernel::state::State;
+use rayon::ThreadPool;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 
@@ -54,13 +56,28 @@ pub struct Overlap<'s> {
     last: u64,
     /// The step of the state handed ahead of the last checkpoint, if any.
     ahead: Option<u64>,
+    /// The kernel's threads, which copy a large state handed over.
+    pool: Option<&'s ThreadPool>,
     /// The monitor, and the CPU seconds the thread spent judging and listing ahead.
     thread: ScopedJoinHandle<'s, (Monitor, f64)>,
 }
 
+/// A copy of `s` for the checker thread, a large state's positions and velocities copied on
+/// the kernel's threads (at 1,000,000 bodies, 48 MB of fresh memory at every checkpoint).
+fn copied(s: &State, pool: Option<&ThreadPool>) -> State {
+    let (x, v) = (spread::copied(pool, &s.x), spread::copied(pool, &s.v));
+    State { step: s.step, t: s.t, x, v, chain: s.chain.clone(), spin: s.spin.clone() }
+}
+
 impl<'s> Checking<'s> {
     /// The monitor on a second thread of `scope`, judging the states due for `claims`.
-    pub fn overlapped<'e>(scope: &'s Scope<'s, 'e>, mut monitor: Monitor, claims: &[Claim], last: u64) -> Self {
+    pub fn overlapped<'e>(
+        scope: &'s Scope<'s, 'e>,
+        mut monitor: Monitor,
+        claims: &[Claim],
+        last: u64,
+        pool: Option<&'s ThreadPool>,
+    ) -> Self {
         let every = claims.iter().filter(|c| c.kind.is_dynamic()).map(|c| c.every).collect();
         let cpus = monitor.threads();
         // the list made ahead saves the last checkpoint its grid only if another CPU builds it
@@ -104,7 +121,7 @@ impl<'s> Checking<'s> {
             }
             (monitor, busy)
         });
-        Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, ahead, thread })
+        Checking::Overlapped(Overlap { states, verdicts, pending: false, every, last, ahead, pool, thread })
     }
 
     /// Shows the checker a state, and in domains the ranks' parts of it (`Monitor::observe_with`).
@@ -115,12 +132,12 @@ impl<'s> Checking<'s> {
             Checking::Inline(m) => m.observe_with(&s.snapshot(), parts.as_ref()).map_err(|h| (h, s.clone())),
             Checking::Overlapped(o) if s.step == 0 || o.next_checkpoint(s.step - 1) == s.step => {
                 o.settle()?;
-                o.hand(Handed::Checkpoint(s.clone(), parts));
+                o.hand(Handed::Checkpoint(copied(s, o.pool), parts));
                 o.pending = true;
                 Ok(())
             }
             Checking::Overlapped(o) if o.ahead == Some(s.step) => {
-                o.hand(Handed::Ahead(s.clone()));
+                o.hand(Handed::Ahead(copied(s, o.pool)));
                 Ok(())
             }
             Checking::Overlapped(_) => Ok(()),
@@ -289,7 +306,7 @@ mod tests {
             std::thread::scope(|scope| {
                 let mut monitor = Monitor::new(scene.model.clone(), scene.claims.clone(), 60).unwrap();
                 monitor.set_threads(cpus);
-                let c = Checking::overlapped(scope, monitor, &scene.claims, 60);
+                let c = Checking::overlapped(scope, monitor, &scene.claims, 60, None);
                 let due: Vec<u64> =
                     std::iter::successors(Some(0), |&s| Some(c.next_due(s)).filter(|_| s < 60)).collect();
                 assert_eq!(due[1..], stops, "{cpus} CPUs");

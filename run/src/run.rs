@@ -299,7 +299,7 @@ pub fn run(scene: &Scene, mut opts: Options) -> Result<Report, String> {
     let mut solver_carried = Err("the solver could not start".to_string());
     let (monitor, busy) = std::thread::scope(|scope| -> Result<(Monitor, Option<f64>), String> {
         let mut checking = if overlap {
-            Checking::overlapped(scope, monitor, &scene.claims, steps)
+            Checking::overlapped(scope, monitor, &scene.claims, steps, graph.pool())
         } else {
             Checking::Inline(monitor)
         };
