@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # What a run costs outside its own loop: the set-up before step 0 (compile, lattice, model
 # checks, graph, first memory) and the exit after the last, as the process's wall time less
-# the run's `wall_s`, one step on one thread. Give one binary, or several (A/B: before and
-# after a change), interleaved round by round so the machine's drift falls on all alike:
+# the run's `wall_s`, one step on one thread (on `THREADS` threads where that is set: a large
+# lattice is laid out on the run's threads). Give one binary, or several (A/B: before and after
+# a change), interleaved round by round so the machine's drift falls on all alike:
 #
 #     sed 's/\[20, 20, 20\]/[40, 40, 40]/' scenes/bench/lj_32k.lagra > /tmp/lj_256k.lagra
-#     bash bench/setup_cost.sh /tmp/lj_256k.lagra ROUNDS BINARY [BINARY...]
+#     THREADS=2 bash bench/setup_cost.sh /tmp/lj_256k.lagra ROUNDS BINARY [BINARY...]
 #
 # Prints each binary's times in seconds, sorted, and their median.
 set -euo pipefail
