@@ -427,6 +427,46 @@ mod tests {
         assert!((e - es).abs() < 1e-12 * es.abs(), "{e} vs {es}");
     }
 
+    /// A sparse gas in a small box periodic along x (side 10.17 against a list reach of 2.8),
+    /// whose clusters span wide columns and are listed against their own images: the kernel's energy
+    /// is that of the pairs within the cutoff and no more. (Empty slots 4 r apart along x met
+    /// their neighbours' images one box over here, within the cutoff: a phantom pair's energy.)
+    #[test]
+    fn a_small_sparse_box_has_no_pair_of_empty_slots() {
+        let side = 10.17;
+        let row = lennard_jones::Shifted::row(&[1.0, 1.0, 2.5]);
+        for seed in 0..400 {
+            let mut rng = Rng::new(seed);
+            // periodic along x, and along y and z or not
+            let periodic = [true, seed % 2 == 0, seed % 4 < 2];
+            let cell = Some(Cell { size: [side; 3], periodic });
+            // bodies no closer than 0.9, so that no pair's energy drowns a phantom's
+            let mut x: Vec<[f64; 3]> = vec![];
+            while x.len() < 64 + seed as usize % 100 {
+                // (spread over three box lengths: along an open axis the columns are then few
+                // and wide, and a cluster can span the box along x)
+                let p: [f64; 3] = std::array::from_fn(|_| rng.uniform(-side, 2.0 * side));
+                let close = x.iter().any(|q| norm2(&Cell::image(&cell, std::array::from_fn(|a| p[a] - q[a]))) < 0.81);
+                if !close {
+                    x.push(p);
+                }
+            }
+            let mut l = Neighbours::new(&cell, 2.5).unwrap();
+            l.update(&x, &cell, None);
+            let mut f = vec![[F64x4::default(); 3]; l.clusters()];
+            let e = kernel::<lennard_jones::Shifted, ENERGY>(&l, &row, (&[], &[]), 0..l.clusters(), &whole(&l), &mut f)
+                .value();
+            let (mut pairs, mut size) = (0.0, 0.0);
+            crate::traverse::pairs::<()>(&x, &cell, None, |_, _, d| {
+                let v = lennard_jones::Shifted::eval(&row, d, [0.0; 4], 0.0).unwrap().1;
+                (pairs, size) = (pairs + v, size + v.abs());
+                Ok(())
+            })
+            .unwrap();
+            assert!((e - pairs).abs() <= 1e-12 * size, "seed {seed}: the list's {e} against the pairs' {pairs}");
+        }
+    }
+
     /// The kernel compiled for AVX-512 (32 registers, the same 256-bit instructions) gives the
     /// portable kernel's bits, forces and energy, for terms with and without a shift.
     #[test]

@@ -40,18 +40,24 @@ pub(super) fn joined<U: Copy + Send + Sync>(
     all
 }
 
-/// Where empty slots sit: 10 r beyond the farthest coordinate of any body, 4 r apart along x,
-/// so that no body and no other empty slot is within r of one, the bodies' moves between builds
-/// (less than the skin) included, and no distance to one squares into a subnormal's range.
-pub(super) fn far(w: &[[f64; 3]], r: f64, spread: Option<&ThreadPool>) -> impl Fn(usize) -> [f64; 3] {
+/// Where empty slots sit: beyond the farthest coordinate of any body by r and the longest
+/// period `p` (so that no periodic image of a body comes within r of one), along y and z too,
+/// and 4 r + p apart from each other along x (so that no image of one comes within r of
+/// another): a pair with an empty slot is beyond the cutoff whatever image the list gives it.
+/// (Without the periods, 4 r apart, an empty slot's image one box over could land within the
+/// cutoff of its neighbour's in a small sparse box, and the kernel counted the phantom pair's
+/// energy: `the_list_is_every_cluster_pair_that_touches`.) And no distance to one squares into
+/// a subnormal's range.
+pub(super) fn far(w: &[[f64; 3]], r: f64, p: f64, spread: Option<&ThreadPool>) -> impl Fn(usize) -> [f64; 3] {
     let largest = |p: &[f64; 3]| p.iter().fold(0.0f64, |m, c| m.max(c.abs()));
     // (the largest of a set is the same however it is split)
     let base = spread::pass(|| match spread {
         Some(pool) => pool.install(|| w.par_iter().with_min_len(BLOCK).map(largest).reduce(|| 0.0, f64::max)),
         None => w.iter().map(largest).fold(0.0, f64::max),
-    }) + 10.0 * r
+    }) + p
+        + 10.0 * r
         + 1.0;
-    move |slot| [base + 4.0 * r * slot as f64, base, base]
+    move |slot| [base + (4.0 * r + p) * slot as f64, base, base]
 }
 
 /// An axis-aligned box around a cluster's bodies.
@@ -67,6 +73,11 @@ impl Bounds {
             lo: std::array::from_fn(|a| b.lo[a].min(p[a])),
             hi: std::array::from_fn(|a| b.hi[a].max(p[a])),
         })
+    }
+
+    /// The box around `boxes` (empty, lo above hi, if there are none).
+    pub(super) fn around(boxes: &[Bounds]) -> Bounds {
+        Bounds::of(boxes.iter().flat_map(|b| [&b.lo, &b.hi]))
     }
 }
 
@@ -162,10 +173,73 @@ impl Columns {
     }
 }
 
+/// Whether some body of an i-cluster lies within r (r² given) of one of cluster `xj` moved by
+/// `s` (empty slots are far from everything), from the i-cluster's `Rows`: boxes within r whose
+/// bodies are not (a third of them on a dense liquid) are left out.
+pub(super) trait Touch<Rows>: Fn(&Rows, &Cluster, &[f64; 3], f64) -> bool {}
+impl<Rows, F: Fn(&Rows, &Cluster, &[f64; 3], f64) -> bool> Touch<Rows> for F {}
+
+/// `Touch` as four rows of four lanes (the i-cluster's positions are its rows): sixteen
+/// distances, no branch.
+#[inline(always)]
+fn touch(xi: &Cluster, xj: &Cluster, s: &[f64; 3], r2: f64) -> bool {
+    let xs = [xj[0] + s[0], xj[1] + s[1], xj[2] + s[2]];
+    let mut least = F64x4::splat(f64::INFINITY);
+    for a in 0..LANES {
+        let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
+        least = least.min(norm2(&d));
+    }
+    least.lt(F64x4::splat(r2)).any()
+}
+
+/// An i-cluster's rows in AVX-512 registers: bodies 0 and 1 (each four times over), then
+/// bodies 2 and 3, by coordinate.
+#[cfg(target_arch = "x86_64")]
+type Eight = [[std::arch::x86_64::__m512d; 3]; 2];
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[inline]
+fn eight(xi: &Cluster) -> Eight {
+    use std::arch::x86_64::_mm512_set_pd;
+    [0, 2].map(|a| {
+        std::array::from_fn(|k| {
+            let (p, q) = (xi[k].lane(a), xi[k].lane(a + 1));
+            _mm512_set_pd(q, q, q, q, p, p, p, p)
+        })
+    })
+}
+
+/// `touch` on AVX-512 registers, two rows in each (the j-cluster twice over against `eight`'s
+/// rows): half the instructions, each distance computed by the same operations in the same
+/// order as `touch` (the j-positions moved by s, the differences, |d|² as `norm2`), so the
+/// same answer.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[inline]
+fn touch_eight(xi: &Eight, xj: &Cluster, s: &[f64; 3], r2: f64) -> bool {
+    use std::arch::x86_64::*;
+    let xs: [__m512d; 3] = std::array::from_fn(|k| {
+        let [a, b, c, d] = xj[k].to_array();
+        _mm512_add_pd(_mm512_set_pd(d, c, b, a, d, c, b, a), _mm512_set1_pd(s[k]))
+    });
+    let r2 = _mm512_set1_pd(r2);
+    let mut near = 0;
+    for row in xi {
+        let d: [__m512d; 3] = std::array::from_fn(|k| _mm512_sub_pd(xs[k], row[k]));
+        let d2 = _mm512_fmadd_pd(d[2], d[2], _mm512_fmadd_pd(d[1], d[1], _mm512_mul_pd(d[0], d[0])));
+        near |= _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d2, r2);
+    }
+    near != 0
+}
+
 /// Where the search of each neighbouring column (offset along x and y, image along z) has got
 /// to, for the i-clusters of one column, taken in z order.
 struct Cursors {
     at: Vec<(usize, usize)>,
+    /// Each neighbouring column's z window (`Search::z_reach`), worked out at the column's
+    /// first use (NaN before: a square root for every i-cluster cost more than it saved).
+    z_reach: Vec<f64>,
     ny: usize,
     reach: [usize; 2],
 }
@@ -175,6 +249,8 @@ pub(super) struct Search<'a> {
     pub(super) columns: &'a Columns,
     pub(super) first: &'a [usize],
     pub(super) boxes: &'a [Bounds],
+    /// Each column's box: around its clusters' boxes.
+    pub(super) column_boxes: &'a [Bounds],
     pub(super) x: &'a [Cluster],
     pub(super) shifts: &'a [[f64; 3]; 32],
     pub(super) r: f64,
@@ -192,7 +268,7 @@ impl Search<'_> {
             // SAFETY: the CPU has the features `wide_part` is compiled for, checked just above.
             return unsafe { self.wide_part(part) };
         }
-        self.portable_part(part)
+        self.portable_part(part, |xi| *xi, touch)
     }
 
     /// `portable_part` compiled for AVX-512, as the force kernel is (`clusters::kernel`): the
@@ -202,49 +278,69 @@ impl Search<'_> {
     #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
     #[inline(never)]
     fn wide_part(&self, part: Range<usize>) -> (Vec<usize>, Vec<Pair>) {
-        self.portable_part(part)
+        self.portable_part(part, |xi| eight(xi), |xi, xj, s, r2| touch_eight(xi, xj, s, r2))
     }
 
     #[inline(always)]
-    fn portable_part(&self, part: Range<usize>) -> (Vec<usize>, Vec<Pair>) {
+    fn portable_part<Rows>(
+        &self,
+        part: Range<usize>,
+        rows: impl Fn(&Cluster) -> Rows,
+        touch: impl Touch<Rows>,
+    ) -> (Vec<usize>, Vec<Pair>) {
         let (mut start, mut pairs) = (vec![], vec![]);
         let mut column = self.first.partition_point(|&f| f <= part.start) - 1;
         let reach = [0, 1].map(|a| self.columns.reach(a, self.r) as usize);
-        let mut cursors = Cursors { at: vec![], ny: 2 * reach[1] + 1, reach };
+        let mut cursors = Cursors { at: vec![], z_reach: vec![], ny: 2 * reach[1] + 1, reach };
         for ic in part {
             if self.first[column + 1] <= ic || cursors.at.is_empty() {
                 while self.first[column + 1] <= ic {
                     column += 1;
                 }
                 cursors.at = vec![(0, 0); (2 * reach[0] + 1) * cursors.ny * 3];
+                cursors.z_reach = vec![f64::NAN; (2 * reach[0] + 1) * cursors.ny];
             }
             start.push(pairs.len());
-            self.near(ic, column, &mut cursors, &mut pairs);
+            self.near(ic, column, &mut cursors, &mut pairs, (&rows(&self.x[ic]), &touch));
         }
         (start, pairs)
     }
 
-    /// Whether some body of cluster `ic` lies within r of one of cluster `jc` moved by `s` (empty
-    /// slots are far from everything): boxes within r whose bodies are not (a third of them on a
-    /// dense liquid) are left out. Sixteen distances, no branch.
-    #[inline(always)]
-    fn touch(&self, ic: usize, jc: usize, s: &[f64; 3]) -> bool {
-        let (xi, xj) = (&self.x[ic], &self.x[jc]);
-        let xs = [xj[0] + s[0], xj[1] + s[1], xj[2] + s[2]];
-        let mut least = F64x4::splat(f64::INFINITY);
-        for a in 0..LANES {
-            let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
-            least = least.min(norm2(&d));
+    /// How far along z a body of column `col` moved by `shift` (along x and y) can be from one
+    /// of column `column` and still lie within r: √(r² − g²), g the gap between the two
+    /// columns' boxes across x and y (a column two over from `column` needs a z window of
+    /// √(2.8² − 1.68²) = 2.24 instead of 2.8 on the LJ liquid: an eighth fewer candidates to
+    /// test). Why the window holds every pair the sixteen distances would list: the gap along
+    /// an axis is computed with the same roundings as a pair's difference there (each rounding
+    /// monotone), so it is at most that difference's size; what is left for z is widened by
+    /// 10⁻⁹ against the square root's rounding. One window for every i-cluster of `column`, so
+    /// the cursors still only move up.
+    fn z_reach(&self, column: usize, col: usize, shift: [f64; 2]) -> f64 {
+        let (i, j) = (&self.column_boxes[column], &self.column_boxes[col]);
+        let gap = |a: usize| (j.lo[a] + shift[a] - i.hi[a]).max(i.lo[a] - (j.hi[a] + shift[a])).max(0.0);
+        let (gx, gy) = (gap(0), gap(1));
+        let left = self.r * self.r - gy.mul_add(gy, gx * gx);
+        if left > 0.0 {
+            left.sqrt() * (1.0 + 1e-9)
+        } else {
+            f64::NEG_INFINITY
         }
-        least.lt(F64x4::splat(self.r * self.r)).any()
     }
 
     /// The clusters whose boxes lie within r of cluster `ic`'s (in column `column`), each
     /// cluster pair once: j after i, or i itself at the zero image or a later one.
     #[inline(always)]
-    fn near(&self, ic: usize, column: usize, cursors: &mut Cursors, out: &mut Vec<Pair>) {
+    fn near<Rows>(
+        &self,
+        ic: usize,
+        column: usize,
+        cursors: &mut Cursors,
+        out: &mut Vec<Pair>,
+        (rows, touch): (&Rows, &impl Touch<Rows>),
+    ) {
         let g = self.columns;
         let b = &self.boxes[ic];
+        let r2 = self.r * self.r;
         let (cx, cy) = ((column % g.n[0]) as i64, (column / g.n[0]) as i64);
         // offsets along an axis: all within r of the column (and one wrap at most, since the
         // box is longer than 2r); on an open axis, only columns that exist
@@ -266,18 +362,22 @@ impl Search<'_> {
         };
         for (jx, nx, ix) in offsets(0, cx) {
             let sx = nx as f64 * g.period[0];
-            let (lo, hi) = (g.lo[0] + jx as f64 * g.width[0] + sx, g.lo[0] + (jx + 1) as f64 * g.width[0] + sx);
-            let gx = (lo - b.hi[0]).max(b.lo[0] - hi).max(0.0);
             for (jy, ny, iy) in offsets(1, cy) {
                 let sy = ny as f64 * g.period[1];
-                let (lo, hi) = (g.lo[1] + jy as f64 * g.width[1] + sy, g.lo[1] + (jy + 1) as f64 * g.width[1] + sy);
-                let gy = (lo - b.hi[1]).max(b.lo[1] - hi).max(0.0);
-                if gx * gx + gy * gy >= self.r * self.r {
-                    continue;
-                }
                 let col = jx + g.n[0] * jy;
                 // clusters are numbered column by column: an earlier column's come before ic's
                 if col < column {
+                    continue;
+                }
+                // (a column too far from ic's is left out by a test that comes out the same for
+                // every i-cluster of the column: one by ic's own box, which varies, cost more in
+                // mispredicted branches than the candidates it saved)
+                let rz = &mut cursors.z_reach[ix * cursors.ny + iy];
+                if rz.is_nan() {
+                    *rz = self.z_reach(column, col, [sx, sy]);
+                }
+                let rz = *rz;
+                if rz < 0.0 {
                     continue;
                 }
                 let run = &self.boxes[self.first[col]..self.first[col + 1]];
@@ -288,11 +388,11 @@ impl Search<'_> {
                     // the column's clusters are in z order, their lower and upper bounds both, and
                     // so are ic's column's: the range only moves up, cluster by cluster
                     let (from, to) = &mut cursors.at[((ix * cursors.ny) + iy) * 3 + (nz + 1) as usize];
-                    while *from < run.len() && run[*from].hi[2] + sz < b.lo[2] - self.r {
+                    while *from < run.len() && run[*from].hi[2] + sz < b.lo[2] - rz {
                         *from += 1;
                     }
                     *to = (*to).max(*from);
-                    while *to < run.len() && run[*to].lo[2] + sz <= b.hi[2] + self.r {
+                    while *to < run.len() && run[*to].lo[2] + sz <= b.hi[2] + rz {
                         *to += 1;
                     }
                     // bodies within r imply boxes within r: the sixteen distances alone decide,
@@ -306,14 +406,14 @@ impl Search<'_> {
                         None => {
                             for jc in from..to {
                                 out[end] = Pair::new(jc, image);
-                                end += usize::from(self.touch(ic, jc, s));
+                                end += usize::from(touch(rows, &self.x[jc], s, r2));
                             }
                         }
                         // (a loop of its own: the one above, every list's, stays as it was)
                         Some(ghostly) => {
                             for jc in from..to {
                                 out[end] = Pair::new(jc, image);
-                                end += usize::from(self.touch(ic, jc, s) && !ghostly[jc]);
+                                end += usize::from(touch(rows, &self.x[jc], s, r2) && !ghostly[jc]);
                             }
                         }
                     }
@@ -321,5 +421,44 @@ impl Search<'_> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forces::dual::Rng;
+    use std::array::from_fn;
+
+    /// The eight-lane test answers as the four-lane one where it is hardest to: a j-body a few
+    /// ulps either side of r from an i-body, where an operation done otherwise would flip the
+    /// answer (both answers occur, or the test would not bite).
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn eight_lanes_answer_as_four_at_the_edge() {
+        if !std::is_x86_feature_detected!("avx512vl") {
+            eprintln!("this CPU has no AVX-512: the eight-lane test is not compiled into any run here");
+            return;
+        }
+        let (mut rng, r) = (Rng::new(7), 2.8f64);
+        let mut answers = [0; 2];
+        for _ in 0..100_000 {
+            let xi: Cluster = from_fn(|_| F64x4::new(from_fn(|_| rng.uniform(0.0, 2.0))));
+            let (a, b) = (rng.uniform(0.0, 4.0) as usize, rng.uniform(0.0, 4.0) as usize);
+            let u: [f64; 3] = from_fn(|_| rng.uniform(-1.0, 1.0));
+            let scale = r * (1.0 + (rng.uniform(-4.0, 4.0)).round() * f64::EPSILON) / norm2(&u).sqrt();
+            let s: [f64; 3] = from_fn(|_| [-10.0, 0.0, 10.0][rng.uniform(0.0, 3.0) as usize]);
+            // body b of j at about r from body a of i (once moved by s), the others far
+            let xj: Cluster = from_fn(|k| {
+                F64x4::new(from_fn(|l| if l == b { xi[k].lane(a) + u[k] * scale - s[k] } else { 100.0 + l as f64 }))
+            });
+            let four = touch(&xi, &xj, &s, r * r);
+            // SAFETY: the CPU has AVX-512 (checked above), which `eight` and `touch_eight` are
+            // compiled for.
+            let wide = unsafe { touch_eight(&eight(&xi), &xj, &s, r * r) };
+            assert_eq!(four, wide, "{xi:?} {xj:?} {s:?}");
+            answers[usize::from(four)] += 1;
+        }
+        assert!(answers.iter().all(|&n| n > 1000), "{answers:?}");
     }
 }
