@@ -313,8 +313,9 @@ impl Search<'_> {
     /// test). Why the window holds every pair the sixteen distances would list: the gap along
     /// an axis is computed with the same roundings as a pair's difference there (each rounding
     /// monotone), so it is at most that difference's size; what is left for z is widened by
-    /// 10⁻⁹ against the square root's rounding. One window for every i-cluster of `column`, so
-    /// the cursors still only move up.
+    /// 10⁻⁹ against the square root's rounding. −∞ where the gap is r or more: no pair of the
+    /// two columns can be listed. One window for every i-cluster of `column`, so the cursors
+    /// still only move up.
     fn z_reach(&self, column: usize, col: usize, shift: [f64; 2]) -> f64 {
         let (i, j) = (&self.column_boxes[column], &self.column_boxes[col]);
         let gap = |a: usize| (j.lo[a] + shift[a] - i.hi[a]).max(i.lo[a] - (j.hi[a] + shift[a])).max(0.0);
