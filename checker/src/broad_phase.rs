@@ -190,7 +190,7 @@ impl<'a> Neighbourhood<'a> {
     /// odd or even in it), so the pairs are exactly those of `of`.
     pub fn each_unordered(&self, part: Range<usize>, mut f: impl FnMut(&[Near])) {
         let mut pairs = vec![];
-        // a few bodies' pairs at a time, so that few groups of four are left short
+        // a few bodies' pairs at a time, so that few groups of lanes are left short
         let mut add = |i: usize, j: usize| {
             pairs.push(Near { i: i.min(j), j: i.max(j) });
             if pairs.len() >= 256 {
