@@ -1,5 +1,5 @@
 //! A pair term's sum over its pairs: in the double loop's order in chunks of bodies (the same
-//! bits on any number of threads), or, for `Outward`, eight pairs at a time in `Lanes` added
+//! bits on any number of threads), or, for `Outward`, sixteen pairs at a time in `Lanes` added
 //! exactly in any order; and the reaches the broad phase is asked for.
 
 use super::Lifted;
@@ -48,7 +48,7 @@ impl<R: PairSum> Lifted<R> {
 }
 
 /// How a pair term's potentials at all its pairs are added up: one pair after another in the
-/// double loop's order, or, for `Outward`, eight pairs at a time in `Lanes` (each pair gets the
+/// double loop's order, or, for `Outward`, sixteen pairs at a time in `Lanes` (each pair gets the
 /// same bits as alone) and added exactly in any order (`ExactSum`).
 pub trait PairSum: Real + Send + Sync {
     /// `start` + Σ `each(i)` over i in 0..n: one after another, or for `Outward` exactly, in
@@ -94,7 +94,7 @@ impl PairSum for Outward {
 
 impl Lifted<Outward> {
     /// Σ lo and Σ hi, each exact, of the potential of instance `n` (of `kind`) at the pairs
-    /// `near` holds, eight pairs at a time in `Lanes`, in `C` classes: `class` puts a pair in one
+    /// `near` holds, sixteen pairs at a time in `Lanes`, in `C` classes: `class` puts a pair in one
     /// or leaves it out. Listed in parts on the threads in whatever order is fastest: exact sums
     /// do not depend on it.
     pub(super) fn exact_lane_sums<const C: usize>(
@@ -111,7 +111,7 @@ impl Lifted<Outward> {
             let mut sums: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());
             let reads = kind.reads();
             let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
-            // the pairs kept, put into the lanes as they come, evaluated eight at a time; the
+            // the pairs kept, put into the lanes as they come, evaluated sixteen at a time; the
             // lanes past a short last group hold the group before's sites (or NaN) and are
             // dropped by the zip
             let (mut classes, mut held) = ([0; WIDTH], 0);
@@ -308,9 +308,9 @@ mod tests {
         assert_eq!(bits(reused.energy(&few)), bits(Lifted::new(&few, &s, &Outward::NAN).energy(&few)));
     }
 
-    /// Eight pairs at a time (`PairSum` for `Outward`), listed in any order and in parts, give
+    /// Sixteen pairs at a time (`PairSum` for `Outward`), listed in any order and in parts, give
     /// the bits of each pair's own enclosure (evaluated alone, in the double loop's order) added
-    /// exactly and rounded once — whatever the number of pairs modulo eight, by the grid and by
+    /// exactly and rounded once — whatever the number of pairs modulo sixteen, by the grid and by
     /// the double loop (under 64 bodies) — and never a wider sum than adding them one by one.
     #[test]
     fn pairs_in_lanes_add_up_to_the_exact_sum_of_each_alone() {

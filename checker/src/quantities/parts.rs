@@ -358,7 +358,7 @@ fn covers(l: &Local) -> Result<(), String> {
 impl Lifted<Outward> {
     /// Σ over the pairs `near` holds of instance `n`'s potential, a pair of two owned bodies
     /// (`i < owned`) whole, of one owned body half, of none not at all: as
-    /// `PairSum::add_potentials` sums, eight pairs at a time and exactly, in two sums.
+    /// `PairSum::add_potentials` sums, sixteen pairs at a time and exactly, in two sums.
     fn pairs_part(&self, kind: Kind, n: usize, near: &Neighbourhood, owned: usize) -> Outward {
         // [halves, wholes]: a pair counts by how many of its bodies are owned, none not at all
         let [halves, wholes] = self
