@@ -118,13 +118,6 @@ impl Lanes {
     }
 }
 
-/// × and ÷ of positive intervals (distances, their powers: most of a pair term's products)
-/// without the hull of four: rounding to nearest is monotone, so of the four endpoint results
-/// the least is lo·lo (lo/hi) and the greatest hi·hi (hi/lo), the bits `Outward`'s hull
-/// picks. A positive interval times any ordered one (a strength times an energy of either
-/// sign) likewise: the least is lo·b.lo if b.lo ≥ 0, else hi·b.lo, the greatest hi·b.hi if
-/// b.hi ≥ 0, else lo·b.hi (a positive finite factor makes no 0·∞). One branch for all the
-/// lanes, which the lanes of a pair term almost always take.
 /// `f(k)` for every lane k, as a loop that inlines (`from_fn` at sixteen lanes did not).
 #[inline(always)]
 fn each(f: impl Fn(usize) -> f64) -> [f64; WIDTH] {
@@ -135,6 +128,13 @@ fn each(f: impl Fn(usize) -> f64) -> [f64; WIDTH] {
     r
 }
 
+/// × and ÷ of positive intervals (distances, their powers: most of a pair term's products)
+/// without the hull of four: rounding to nearest is monotone, so of the four endpoint results
+/// the least is lo·lo (lo/hi) and the greatest hi·hi (hi/lo), the bits `Outward`'s hull
+/// picks. A positive interval times any ordered one (a strength times an energy of either
+/// sign) likewise: the least is lo·b.lo if b.lo ≥ 0, else hi·b.lo, the greatest hi·b.hi if
+/// b.hi ≥ 0, else lo·b.hi (a positive finite factor makes no 0·∞). One branch for all the
+/// lanes, which the lanes of a pair term almost always take.
 impl Mul for Lanes {
     type Output = Lanes;
     #[inline(always)]
