@@ -10,6 +10,8 @@ pub mod derivatives;
 pub mod forces;
 pub mod graph;
 pub mod lanes;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod lanes8;
 pub mod neighbours;
 pub mod pieces;
 pub mod rigid;

@@ -23,9 +23,9 @@ fn after(a: usize) -> Mask4 {
 /// two colour components, for the terms that read them (`Paired::BODIES`, `COLOUR`).
 #[derive(Clone, Copy, Default)]
 pub struct Traits {
-    m: F64x4,
-    q: F64x4,
-    c: [F64x4; 2],
+    pub(super) m: F64x4,
+    pub(super) q: F64x4,
+    pub(super) c: [F64x4; 2],
 }
 
 /// Gathers the bodies' traits by cluster, if the term reads any (else nothing).
@@ -65,7 +65,8 @@ pub fn shares(l: &Neighbours, owned: usize) -> Vec<F64x4> {
 /// Row `row`'s forces over the i-clusters `range` added to `f`, a piece's buffer (i-cluster
 /// `ic` at `ic - range.start`, listed pair q's j-cluster at `place[q]`: `pieces`), and the sum
 /// `SUM` asks for: plain within an i-cluster's pairs, compensated across clusters. Where the CPU has
-/// AVX-512 (detected at run time), the same code compiled for it (`wide_registers`).
+/// AVX-512 (detected at run time), two rows a register with each cluster pair's formula one
+/// pair ahead of its forces (`pipelined::kernel`): the same bits.
 pub fn kernel<T: Paired, const SUM: u8>(
     l: &Neighbours,
     row: &T::Row,
@@ -75,31 +76,10 @@ pub fn kernel<T: Paired, const SUM: u8>(
     f: &mut [Cluster],
 ) -> Sum {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx512vl") {
-        // SAFETY: the CPU has the features `wide_registers` is compiled for, checked just above.
-        return unsafe { wide_registers::<T, SUM>(l, row, (traits, shares), range, place, f) };
+    if std::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has the features `pipelined::kernel` is compiled for, checked just above.
+        return unsafe { super::pipelined::kernel::<T, SUM>(l, row, (traits, shares), range, place, f) };
     }
-    portable::<T, SUM>(l, row, (traits, shares), range, place, f)
-}
-
-/// `portable` compiled for AVX-512: its vectors stay 256 bits wide (the same instructions on
-/// the same lanes, so the same bits), but the encoding has 32 vector registers instead of 16,
-/// enough for a cluster's twelve force accumulators and the row in flight, which otherwise
-/// spill to the stack in every row (1,000 steps of 32,000 LJ atoms: ~13% faster). A function
-/// of its own rather than a closure passed in: `portable` is `inline(always)`, so it is
-/// compiled into this one for these features; a closure's call need not be inlined, and one
-/// tried was not (it ran at the portable speed).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
-#[inline(never)]
-fn wide_registers<T: Paired, const SUM: u8>(
-    l: &Neighbours,
-    row: &T::Row,
-    (traits, shares): (&[Traits], &[F64x4]),
-    range: Range<usize>,
-    place: &[u32],
-    f: &mut [Cluster],
-) -> Sum {
     portable::<T, SUM>(l, row, (traits, shares), range, place, f)
 }
 
@@ -117,7 +97,7 @@ fn portable<T: Paired, const SUM: u8>(
     let base = range.start;
     for ic in range {
         let mut fi = [[zero; 3]; LANES];
-        let mut e = zero;
+        let mut e = [zero; 2];
         let listed = l.start[ic]..l.start[ic + 1];
         for (p, &at) in l.pairs[listed.clone()].iter().zip(&place[listed]) {
             let jc = p.j();
@@ -134,14 +114,17 @@ fn portable<T: Paired, const SUM: u8>(
             f[ic - base][c] = f[ic - base][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
         }
         if SUM != FORCES_ONLY {
-            energy.add(e.sum());
+            energy.add((e[0] + e[1]).sum());
         }
     }
     energy
 }
 
 /// One cluster pair's sixteen body pairs, as four rows: body a of the i-cluster against the
-/// j-cluster's four lanes; its forces into `fi` and `fj`, its energy or s·r² into `e`.
+/// j-cluster's four lanes; its forces into `fi` and `fj`, its energy or s·r² into `e`. The
+/// j-forces and the sums are accumulated by the rows' parity, even rows in one register and odd
+/// in another, added at the end: the order in which the AVX-512 build (`pipelined`), holding
+/// two rows a register, adds them, so that both give the same bits.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn rows<T: Paired, const SUM: u8, const DIAGONAL: bool>(
@@ -150,14 +133,15 @@ fn rows<T: Paired, const SUM: u8, const DIAGONAL: bool>(
     (traits, shares): (&[Traits], &[F64x4]),
     (ic, jc, image): (usize, usize, usize),
     fi: &mut [[F64x4; 3]; LANES],
-    e: &mut F64x4,
+    e: &mut [F64x4; 2],
     fj_out: &mut Cluster,
 ) {
     let rc2 = F64x4::splat(T::reach2(row));
     let (xi, xj, sh) = (&l.x[ic], &l.x[jc], &l.shifts[image]);
     let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
-    let mut fj = [F64x4::splat(0.0); 3];
+    let mut fj = [[F64x4::splat(0.0); 3]; 2];
     for (a, fa) in fi.iter_mut().enumerate() {
+        let (fj, e) = (&mut fj[a % 2], &mut e[a % 2]);
         let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
         let r2 = norm2(&d);
         // (empty slots sit beyond every cutoff: `Neighbours::x`)
@@ -183,7 +167,7 @@ fn rows<T: Paired, const SUM: u8, const DIAGONAL: bool>(
         }
     }
     for c in 0..3 {
-        fj_out[c] = fj_out[c] + fj[c];
+        fj_out[c] = fj_out[c] + (fj[0][c] + fj[1][c]);
     }
 }
 
@@ -355,6 +339,46 @@ mod tests {
         }
     }
 
+    /// The same for the AVX-512 kernel's eight lanes (`lanes8`), where the CPU has them.
+    #[cfg(target_arch = "x86_64")]
+    fn eight_lanes_are_the_scalar_formula<T: Paired>(p: &[f64], far: f64) {
+        use crate::lanes8::F64x8;
+        if !std::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        let row = T::row(p);
+        let mut rng = Rng::new(10);
+        for _ in 0..1000 {
+            let mut draw = |lo: f64, hi: f64| F64x8::new(std::array::from_fn(|_| rng.uniform(lo, hi)));
+            let r = draw(0.05, far);
+            let r2 = r * r;
+            let mq: [F64x8; 4] = std::array::from_fn(|_| draw(-2.0, 2.0));
+            let colour = draw(-1.0, 1.0);
+            let (v, s) = T::radial(&row, r2, mq, colour);
+            let (v, s, r2) = (v.to_array(), s.to_array(), r2.to_array());
+            let (mq, colour) = (mq.map(F64x8::to_array), colour.to_array());
+            for k in 0..8 {
+                let (v1, s1) = T::radial(&row, r2[k], mq.map(|m| m[k]), colour[k]);
+                assert_eq!((v[k].to_bits(), s[k].to_bits()), (v1.to_bits(), s1.to_bits()));
+            }
+        }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn every_pair_term_is_one_formula_in_eight_lanes_too() {
+        eight_lanes_are_the_scalar_formula::<lennard_jones::Plain>(&[1.0, 1.0, 2.5], 3.0);
+        eight_lanes_are_the_scalar_formula::<lennard_jones::Shifted>(&[1.2, 0.9, 2.5], 3.0);
+        eight_lanes_are_the_scalar_formula::<lennard_jones::ForceShifted>(&[0.8, 1.1, 3.0], 3.0);
+        eight_lanes_are_the_scalar_formula::<wca::Fast>(&[1.0, 1.0], 1.2);
+        eight_lanes_are_the_scalar_formula::<coulomb_reaction_field::Fast>(&[1.0, 2.0, 78.0], 2.5);
+        eight_lanes_are_the_scalar_formula::<yukawa::Fast>(&[1.0, 1.5], 5.0);
+        eight_lanes_are_the_scalar_formula::<super::super::coulomb::Fast>(&[1.0], 5.0);
+        eight_lanes_are_the_scalar_formula::<super::super::gravity::Fast>(&[1.0], 5.0);
+        eight_lanes_are_the_scalar_formula::<super::super::nuclear_yukawa::Fast>(&[1.0, 2.0], 5.0);
+        eight_lanes_are_the_scalar_formula::<qcd_coulomb::Fast>(&[0.3, 0.2], 5.0);
+    }
+
     #[test]
     fn every_pair_term_is_one_formula_in_one_lane_or_four() {
         lanes_are_the_scalar_formula::<lennard_jones::Plain>(&[1.0, 1.0, 2.5], 3.0);
@@ -467,41 +491,59 @@ mod tests {
         }
     }
 
-    /// The kernel compiled for AVX-512 (32 registers, the same 256-bit instructions) gives the
-    /// portable kernel's bits, forces and energy, for terms with and without a shift.
+    /// The AVX-512 kernel (`pipelined`: two rows a register, each cluster pair's formula one
+    /// pair ahead of its forces) gives the portable kernel's bits, forces and every sum, for
+    /// terms with and without a shift and with charges.
     #[test]
     #[cfg(target_arch = "x86_64")]
-    fn wide_registers_give_the_portable_bits() {
-        if !std::is_x86_feature_detected!("avx512vl") {
+    fn the_pipelined_kernel_gives_the_portable_bits() {
+        if !std::is_x86_feature_detected!("avx512f") {
             eprintln!("no AVX-512 on this CPU: the portable kernel is the only one");
             return;
         }
-        let (_, _, l) = liquid(1000, 6);
-        // charges of either sign, for the terms that read them
-        let charged = Traits { m: F64x4::splat(1.0), q: F64x4::new([1.0, -0.5, 0.7, -1.2]), c: [F64x4::default(); 2] };
-        let traits = vec![charged; l.clusters()];
-        let both = |p: &[f64], run: fn(&Neighbours, &[f64], &[Traits], bool) -> (Vec<u64>, u64)| {
-            [run(&l, p, &traits, true), run(&l, p, &traits, false)]
-        };
-        fn run<T: Paired>(l: &Neighbours, p: &[f64], traits: &[Traits], wide: bool) -> (Vec<u64>, u64) {
+        fn run<T: Paired, const SUM: u8>(l: &Neighbours, p: &[f64], traits: &[Traits], wide: bool) -> (Vec<u64>, u64) {
             let row = T::row(p);
             let traits = if T::BODIES || T::COLOUR { traits } else { &[] };
+            // every other cluster owned, for the OWNED_* sums
+            let shares: Vec<F64x4> = (0..l.clusters()).map(|c| F64x4::splat((c % 2) as f64)).collect();
             let mut f = vec![[F64x4::default(); 3]; l.clusters()];
             let e = match wide {
-                // SAFETY: the CPU has AVX-512VL (the test returned above otherwise)
+                // SAFETY: the CPU has AVX-512F (the test returned above otherwise)
                 true => unsafe {
-                    wide_registers::<T, ENERGY>(l, &row, (traits, &[]), 0..l.clusters(), &whole(l), &mut f)
+                    super::super::pipelined::kernel::<T, SUM>(
+                        l,
+                        &row,
+                        (traits, &shares),
+                        0..l.clusters(),
+                        &whole(l),
+                        &mut f,
+                    )
                 },
-                false => portable::<T, ENERGY>(l, &row, (traits, &[]), 0..l.clusters(), &whole(l), &mut f),
+                false => portable::<T, SUM>(l, &row, (traits, &shares), 0..l.clusters(), &whole(l), &mut f),
             };
             (f.iter().flatten().flat_map(|c| c.to_array()).map(f64::to_bits).collect(), e.value().to_bits())
         }
-        let [a, b] = both(&[1.0, 1.0, 2.5], run::<lennard_jones::Shifted>);
-        assert!(a == b, "shifted LJ");
-        let [a, b] = both(&[1.0, 1.0], run::<wca::Fast>);
-        assert!(a == b, "WCA");
-        let [a, b] = both(&[1.0, 1.5], run::<yukawa::Fast>);
-        assert!(a == b && a.1 != 0, "Yukawa");
+        fn same<T: Paired, const SUM: u8>(l: &Neighbours, p: &[f64], traits: &[Traits], what: &str) {
+            let (a, b) = (run::<T, SUM>(l, p, traits, true), run::<T, SUM>(l, p, traits, false));
+            assert!(a == b, "{what}, sum {SUM}: the AVX-512 kernel's bits differ");
+            assert!(SUM == FORCES_ONLY || a.1 != 0, "{what}: a sum of nothing");
+        }
+        // charges of either sign, for the terms that read them
+        let charged = Traits { m: F64x4::splat(1.0), q: F64x4::new([1.0, -0.5, 0.7, -1.2]), c: [F64x4::default(); 2] };
+        for (n, seed) in [(1000, 6), (2000, 7)] {
+            let (_, _, l) = liquid(n, seed);
+            let traits = vec![charged; l.clusters()];
+            let lj = [1.0, 1.0, 2.5];
+            same::<lennard_jones::Shifted, FORCES_ONLY>(&l, &lj, &traits, "shifted LJ");
+            same::<lennard_jones::Shifted, ENERGY>(&l, &lj, &traits, "shifted LJ");
+            same::<lennard_jones::Shifted, VIRIAL>(&l, &lj, &traits, "shifted LJ");
+            same::<lennard_jones::Shifted, OWNED_ENERGY>(&l, &lj, &traits, "shifted LJ");
+            same::<lennard_jones::Shifted, OWNED_VIRIAL>(&l, &lj, &traits, "shifted LJ");
+            same::<lennard_jones::ForceShifted, ENERGY>(&l, &[0.8, 1.1, 2.5], &traits, "force-shifted LJ");
+            same::<wca::Fast, ENERGY>(&l, &[1.0, 1.0], &traits, "WCA");
+            same::<yukawa::Fast, ENERGY>(&l, &[1.0, 1.5], &traits, "Yukawa");
+            same::<coulomb_reaction_field::Fast, VIRIAL>(&l, &[1.0, 2.0, 78.0], &traits, "reaction field");
+        }
     }
 
     /// Two bodies at one point inside the cutoff give non-finite forces (which the group then

@@ -9,6 +9,8 @@ mod density_derivative;
 pub mod derivative;
 mod groups;
 mod pairs;
+#[cfg(target_arch = "x86_64")]
+mod pipelined;
 
 mod contact_floor;
 mod coulomb;

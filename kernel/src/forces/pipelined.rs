@@ -1,0 +1,153 @@
+//! The cluster kernel on AVX-512: a cluster pair's sixteen body pairs in two registers of eight
+//! lanes (rows 0 and 1 of `clusters::rows`'s four, then rows 2 and 3), each cluster pair's
+//! formula evaluated one cluster pair ahead of its forces.
+//!
+//! Why ahead: a cluster pair's work is one long chain — loads, separations, r², the formula's
+//! division (~23 cycles on an eight-lane register), its products, then the forces that need
+//! them — and the CPU's scheduler holds only a cluster pair or two of waiting instructions, so
+//! in order it idles on the chain (measured: twice the lanes in a register gained 2%). With the
+//! formula of pair q + 1 issued before the forces of pair q, the forces find their inputs ready
+//! while the next division runs: 300 steps of lj_32k 1.51 → 1.32 s on one thread (Intel Xeon,
+//! 2026-12-07), the divider now the bound (two eight-lane divisions a cluster pair).
+//!
+//! The same bits as `clusters::portable`: every lane is its pair's formula, the lanes outside
+//! the reach are +0 as the portable kernel masks them, and the forces and sums are added in the
+//! portable kernel's order — cluster pairs in list order; within one, the j-forces and sums of
+//! even rows and odd rows apart, then together. A test holds the two equal, bit for bit.
+
+use super::clusters::{Traits, ENERGY, FORCES_ONLY, OWNED_ENERGY, OWNED_VIRIAL, VIRIAL};
+use super::Paired;
+use crate::lanes::{norm2, F64x4, Lane};
+use crate::lanes8::F64x8;
+use crate::neighbours::{Cluster, Neighbours, Pair, CENTRE};
+use crate::sum::Sum;
+use std::ops::Range;
+
+/// On a cluster's pairs with itself, body a meets only the slots after it (`clusters::after`),
+/// for rows 0 and 1, then rows 2 and 3.
+const AFTER: [u8; 2] = [0b1100_1110, 0b0000_1000];
+
+/// `clusters::kernel` for a CPU with AVX-512: the same arguments, the same result, bit for bit.
+///
+/// # Safety
+/// The CPU must have AVX-512F (and AVX2 and FMA, which every CPU with it has).
+#[target_feature(enable = "avx2,fma,avx512f")]
+#[inline(never)]
+pub(super) unsafe fn kernel<T: Paired, const SUM: u8>(
+    l: &Neighbours,
+    row: &T::Row,
+    (traits, shares): (&[Traits], &[F64x4]),
+    range: Range<usize>,
+    place: &[u32],
+    f: &mut [Cluster],
+) -> Sum {
+    let zero = F64x8::splat(0.0);
+    let mut energy = Sum::default();
+    let base = range.start;
+    for ic in range {
+        let xi = &l.x[ic];
+        let xi = [0, 2].map(|a| [0, 1, 2].map(|c| F64x8::rows(xi[c], a)));
+        let i = I { ic, xi: &xi, traits };
+        let mut fi = [[zero; 3]; 2];
+        let mut e = zero;
+        let listed = l.start[ic]..l.start[ic + 1];
+        let (pairs, place) = (&l.pairs[listed.clone()], &place[listed]);
+        if let Some(first) = pairs.first() {
+            let mut next = i.evaluate::<T>(l, row, first);
+            for (q, (p, &at)) in pairs.iter().zip(place).enumerate() {
+                let now = next;
+                if let Some(after) = pairs.get(q + 1) {
+                    next = i.evaluate::<T>(l, row, after);
+                }
+                let mut fj = [zero; 3];
+                for h in 0..2 {
+                    for c in 0..3 {
+                        fi[h][c] = now.d[h][c].mul_add(now.s[h], fi[h][c]);
+                        fj[c] = now.d[h][c].mul_neg_add(now.s[h], fj[c]);
+                    }
+                    // (a share of 1 rounds as the plain sums do: a domain owning every body gives their bits)
+                    let share = || (F64x8::rows(shares[ic], 2 * h) + F64x8::twice(shares[p.j()])) * 0.5;
+                    match SUM {
+                        ENERGY => e = e + now.v[h],
+                        VIRIAL => e = e + now.s[h] * now.r2[h],
+                        OWNED_ENERGY => e = now.v[h].mul_add(share(), e),
+                        OWNED_VIRIAL => e = (now.s[h] * now.r2[h]).mul_add(share(), e),
+                        _ => {}
+                    }
+                }
+                let fj_out = &mut f[at as usize];
+                for c in 0..3 {
+                    let [even, odd] = fj[c].halves();
+                    fj_out[c] = fj_out[c] + (even + odd);
+                }
+            }
+        }
+        // row a's lanes are half a % 2 of register a / 2, summed as `F64x4::sum` sums them
+        let rows = fi.map(|h| h.map(F64x8::halves));
+        for c in 0..3 {
+            let sums = std::array::from_fn(|a| rows[a / 2][c][a % 2].sum());
+            f[ic - base][c] = f[ic - base][c] + F64x4::new(sums);
+        }
+        if SUM != FORCES_ONLY {
+            let [even, odd] = e.halves();
+            energy.add((even + odd).sum());
+        }
+    }
+    energy
+}
+
+/// One cluster pair's separations (j minus i, rows 0 and 1, then rows 2 and 3, by axis), r²,
+/// and the formula's V and s there, +0 outside the reach.
+#[derive(Clone, Copy)]
+struct Evaluated {
+    d: [[F64x8; 3]; 2],
+    r2: [F64x8; 2],
+    v: [F64x8; 2],
+    s: [F64x8; 2],
+}
+
+/// The i-cluster: its index, its bodies in rows (`F64x8::rows`), and the bodies' traits.
+struct I<'a> {
+    ic: usize,
+    xi: &'a [[F64x8; 3]; 2],
+    traits: &'a [Traits],
+}
+
+impl I<'_> {
+    /// The formula on the sixteen pairs of the i-cluster with listed pair `p`'s j-cluster.
+    /// (Written out, not through arrays' `map`: a closure the compiler does not inline into this
+    /// AVX-512 function calls every intrinsic in it as a function, ten times slower.)
+    #[inline(always)]
+    fn evaluate<T: Paired>(&self, l: &Neighbours, row: &T::Row, p: &Pair) -> Evaluated {
+        let rc2 = F64x8::splat(T::reach2(row));
+        let (xj, sh) = (&l.x[p.j()], &l.shifts[p.image()]);
+        let xs = [0, 1, 2].map(|c| F64x8::twice(xj[c] + sh[c]));
+        let d = [0, 1].map(|h| [0, 1, 2].map(|c| xs[c] - self.xi[h][c]));
+        let r2 = [norm2(&d[0]), norm2(&d[1])];
+        // (empty slots sit beyond every cutoff: `Neighbours::x`)
+        let diagonal = p.j() == self.ic && p.image() == CENTRE;
+        let inside = [0, 1].map(|h| r2[h].below(rc2) & if diagonal { AFTER[h] } else { u8::MAX });
+        // Masked lanes may hold an infinity or a NaN (a slot against itself): `keep` clears
+        // them. An unmasked one (two bodies at one point) makes the forces non-finite, which
+        // the caller finds and names.
+        let (mq0, c0) = self.pair_traits::<T>(p.j(), 0);
+        let (mq1, c1) = self.pair_traits::<T>(p.j(), 2);
+        let (v0, s0) = T::radial(row, r2[0], mq0, c0);
+        let (v1, s1) = T::radial(row, r2[1], mq1, c1);
+        let (v, s) = ([v0.keep(inside[0]), v1.keep(inside[1])], [s0.keep(inside[0]), s1.keep(inside[1])]);
+        Evaluated { d, r2, v, s }
+    }
+
+    /// `clusters::pair_traits` for rows a and a + 1 against cluster `jc`: [mᵢ, mⱼ, qᵢ, qⱼ] and
+    /// cᵢ·cⱼ, zeros (and no loads) if the term reads none.
+    #[inline(always)]
+    fn pair_traits<T: Paired>(&self, jc: usize, a: usize) -> ([F64x8; 4], F64x8) {
+        let zero = F64x8::splat(0.0);
+        if !(T::BODIES || T::COLOUR) {
+            return ([zero; 4], zero);
+        }
+        let (i, j) = (&self.traits[self.ic], &self.traits[jc]);
+        let mq = [F64x8::rows(i.m, a), F64x8::twice(j.m), F64x8::rows(i.q, a), F64x8::twice(j.q)];
+        (mq, F64x8::twice(j.c[0]) * F64x8::rows(i.c[0], a) + F64x8::twice(j.c[1]) * F64x8::rows(i.c[1], a))
+    }
+}
