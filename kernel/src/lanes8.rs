@@ -123,6 +123,30 @@ impl F64x8 {
         // SAFETY: as above
         unsafe { _mm512_cmp_pd_mask::<_CMP_LT_OQ>(self.0, r.0) }
     }
+    /// self + x in the lanes of `on`, self in the others.
+    #[inline(always)]
+    pub(crate) fn add_on(self, on: u8, x: F64x8) -> F64x8 {
+        // SAFETY: as above
+        F64x8(unsafe { _mm512_mask_add_pd(self.0, on, self.0, x.0) })
+    }
+    /// self − x in the lanes of `on`, self in the others.
+    #[inline(always)]
+    pub(crate) fn sub_on(self, on: u8, x: F64x8) -> F64x8 {
+        // SAFETY: as above
+        F64x8(unsafe { _mm512_mask_sub_pd(self.0, on, self.0, x.0) })
+    }
+    /// a·b + self (rounded once) in the lanes of `on`, self in the others.
+    #[inline(always)]
+    pub(crate) fn mul_add_on(self, on: u8, a: F64x8, b: F64x8) -> F64x8 {
+        // SAFETY: as above
+        F64x8(unsafe { _mm512_mask3_fmadd_pd(a.0, b.0, self.0, on) })
+    }
+    /// self − a·b (rounded once) in the lanes of `on`, self in the others.
+    #[inline(always)]
+    pub(crate) fn mul_sub_on(self, on: u8, a: F64x8, b: F64x8) -> F64x8 {
+        // SAFETY: as above
+        F64x8(unsafe { _mm512_mask3_fnmadd_pd(a.0, b.0, self.0, on) })
+    }
     /// The lanes in `keep`, +0 elsewhere (whatever was there, NaN included).
     #[inline(always)]
     pub(crate) fn keep(self, keep: u8) -> F64x8 {
@@ -161,6 +185,13 @@ mod tests {
         let [a, b] = F64x8::rows(x, 0).halves();
         assert_eq!((a.to_array(), b.to_array()), ([1.0; 4], [2.0; 4]));
         assert_eq!((-F64x8::splat(0.0)).to_array()[3].to_bits(), (-0.0f64).to_bits());
-        assert_eq!(F64x8::new([1.0, f64::NAN, 3.0, 0.5, 9.0, 2.0, 2.0, 1.0]).below(F64x8::splat(2.0)), 0b1000_1001);
+        let y = F64x8::new([1.0, f64::NAN, 3.0, 0.5, 9.0, 2.0, 2.0, 1.0]);
+        assert_eq!(y.below(F64x8::splat(2.0)), 0b1000_1001);
+        let (one, two) = (F64x8::splat(1.0), F64x8::splat(2.0));
+        assert_eq!(one.add_on(0b0000_0110, two).to_array(), [1.0, 3.0, 3.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        assert_eq!(one.sub_on(0b1000_0000, two).to_array()[6..], [1.0, -1.0]);
+        assert_eq!(one.mul_add_on(0b0000_0001, two, two).to_array()[..2], [5.0, 1.0]);
+        assert_eq!(one.mul_sub_on(0b0000_0010, two, two).to_array()[..2], [1.0, -3.0]);
+        assert_eq!(y.keep(0b0000_0101).to_array()[..3], [1.0, 0.0, 3.0]);
     }
 }

@@ -188,9 +188,10 @@ pub struct Pulled<'a, R> {
 /// placed as in `kernel`), and ∂s/∂p (Δg·d) to the wanted parameters' sums. With `POTENTIAL`,
 /// the gradient of the energy instead (g unread): w = s·d, and ∂V/∂p. Pairs beyond the reach,
 /// empty slots and a cluster's lower triangle with itself are masked, as in `kernel`.
-/// The term's jet must exist (`Pairs::jets_everywhere`). Where the CPU has AVX-512, the same
-/// code compiled for it, as `kernel` is: its twelve i-lane accumulators, the pair's Δg, w and the
-/// parameters' sums spill from 16 registers, not from 32.
+/// The term's jet must exist (`Pairs::jets_everywhere`). Where the CPU has AVX-512, two rows a
+/// register with each cluster pair's jet one pair ahead (`pipelined::pullback`), as `kernel`:
+/// the same bits, for which the j-sums and the parameters' sums here are kept by the rows'
+/// parity, as in `rows`.
 pub fn pullback<T: Paired, const POTENTIAL: bool>(
     l: &Neighbours,
     at: &Pulled<T::Row>,
@@ -199,24 +200,10 @@ pub fn pullback<T: Paired, const POTENTIAL: bool>(
     f: &mut [Cluster],
 ) -> [Sum; 3] {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx512vl") {
-        // SAFETY: the CPU has the features `wide_pullback` is compiled for, checked just above.
-        return unsafe { wide_pullback::<T, POTENTIAL>(l, at, range, place, f) };
+    if std::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has the features `pipelined::pullback` is compiled for, checked just above.
+        return unsafe { super::pipelined::pullback::<T, POTENTIAL>(l, at, range, place, f) };
     }
-    portable_pullback::<T, POTENTIAL>(l, at, range, place, f)
-}
-
-/// `portable_pullback` for AVX-512's 32 registers (the same 256-bit instructions: the same bits).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
-#[inline(never)]
-fn wide_pullback<T: Paired, const POTENTIAL: bool>(
-    l: &Neighbours,
-    at: &Pulled<T::Row>,
-    range: Range<usize>,
-    place: &[u32],
-    f: &mut [Cluster],
-) -> [Sum; 3] {
     portable_pullback::<T, POTENTIAL>(l, at, range, place, f)
 }
 
@@ -234,14 +221,15 @@ fn portable_pullback<T: Paired, const POTENTIAL: bool>(
     let base = range.start;
     for ic in range {
         let mut fi = [[zero; 3]; LANES];
-        let mut dp = [zero; 3];
+        let mut dp = [[zero; 2]; 3];
         let listed = l.start[ic]..l.start[ic + 1];
         for (p, &slot) in l.pairs[listed.clone()].iter().zip(&place[listed]) {
             let (jc, image) = (p.j(), p.image());
             let (xi, xj, sh) = (&l.x[ic], &l.x[jc], &l.shifts[image]);
             let xs = [xj[0] + sh[0], xj[1] + sh[1], xj[2] + sh[2]];
-            let mut wj = [zero; 3];
+            let mut wj = [[zero; 3]; 2];
             for (a, fa) in fi.iter_mut().enumerate() {
+                let wj = &mut wj[a % 2];
                 let d = [xs[0] - xi[0].lane(a), xs[1] - xi[1].lane(a), xs[2] - xi[2].lane(a)];
                 let r2 = norm2(&d);
                 let inside = if jc == ic && image == CENTRE { r2.lt(reach2) & after(a) } else { r2.lt(reach2) };
@@ -260,7 +248,7 @@ fn portable_pullback<T: Paired, const POTENTIAL: bool>(
                         fa[c] = d[c].mul_neg_add(s, fa[c]);
                     }
                     for &w in at.wanted {
-                        dp[w] = dp[w] + inside.and(jet.dv[w]);
+                        dp[w][a % 2] = dp[w][a % 2] + inside.and(jet.dv[w]);
                     }
                     continue;
                 }
@@ -279,18 +267,18 @@ fn portable_pullback<T: Paired, const POTENTIAL: bool>(
                     fa[c] = fa[c] - w;
                 }
                 for &w in at.wanted {
-                    dp[w] = inside.and(jet.ds[w]).mul_add(along, dp[w]);
+                    dp[w][a % 2] = inside.and(jet.ds[w]).mul_add(along, dp[w][a % 2]);
                 }
             }
             for c in 0..3 {
-                f[slot as usize][c] = f[slot as usize][c] + wj[c];
+                f[slot as usize][c] = f[slot as usize][c] + (wj[0][c] + wj[1][c]);
             }
         }
         for c in 0..3 {
             f[ic - base][c] = f[ic - base][c] + F64x4::new(std::array::from_fn(|a| fi[a][c].sum()));
         }
         for &w in at.wanted {
-            params[w].add(dp[w].sum());
+            params[w].add((dp[w][0] + dp[w][1]).sum());
         }
     }
     params
@@ -543,6 +531,71 @@ mod tests {
             same::<wca::Fast, ENERGY>(&l, &[1.0, 1.0], &traits, "WCA");
             same::<yukawa::Fast, ENERGY>(&l, &[1.0, 1.5], &traits, "Yukawa");
             same::<coulomb_reaction_field::Fast, VIRIAL>(&l, &[1.0, 2.0, 78.0], &traits, "reaction field");
+        }
+    }
+
+    /// The AVX-512 pullback (`pipelined::pullback`) gives the portable pullback's bits: the
+    /// covector's image and the parameters' sums, of the force and of the potential, on a liquid
+    /// and on a sparse gas where many rows have no pair inside (rows the portable one skips).
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_pipelined_pullback_gives_the_portable_bits() {
+        if !std::is_x86_feature_detected!("avx512f") {
+            eprintln!("no AVX-512 on this CPU: the portable pullback is the only one");
+            return;
+        }
+        fn run<T: Paired, const POTENTIAL: bool>(l: &Neighbours, p: &[f64], wide: bool) -> Vec<u64> {
+            let row = T::row(p);
+            let mut rng = Rng::new(11);
+            let g: Vec<Cluster> = (0..l.clusters())
+                .map(|_| std::array::from_fn(|_| F64x4::new(std::array::from_fn(|_| rng.uniform(-1.0, 1.0)))))
+                .collect();
+            let at = Pulled { row: &row, p, reach2: T::reach2(&row), wanted: &[0, 1, 2], g: &g };
+            let mut f = vec![[F64x4::default(); 3]; l.clusters()];
+            let sums = match wide {
+                // SAFETY: the CPU has AVX-512F (the test returned above otherwise)
+                true => unsafe {
+                    super::super::pipelined::pullback::<T, POTENTIAL>(l, &at, 0..l.clusters(), &whole(l), &mut f)
+                },
+                false => portable_pullback::<T, POTENTIAL>(l, &at, 0..l.clusters(), &whole(l), &mut f),
+            };
+            let forces = f.iter().flatten().flat_map(|c| c.to_array()).map(f64::to_bits);
+            forces.chain(sums.iter().map(|s| s.value().to_bits())).collect()
+        }
+        for (n, seed, scale) in [(1000, 12, 1.0), (400, 13, 1.6)] {
+            // (scaled by 1.6, a sparse gas: many listed rows have no pair inside)
+            let (x, cell, _) = liquid(n, seed);
+            let x: Vec<[f64; 3]> = x.iter().map(|p| p.map(|c| c * scale)).collect();
+            let cell = cell.map(|c| Cell { size: c.size.map(|s| s * scale), ..c });
+            let mut l = Neighbours::new(&cell, 2.5).unwrap();
+            l.update(&x, &cell, None);
+            let empty_rows = (0..l.clusters())
+                .flat_map(|ic| l.pairs[l.start[ic]..l.start[ic + 1]].iter().map(move |p| (ic, p)))
+                .flat_map(|(ic, p)| (0..4).map(move |a| (ic, p, a)))
+                .filter(|&(ic, p, a)| {
+                    let (xi, xj, sh) = (&l.x[ic], &l.x[p.j()], &l.shifts[p.image()]);
+                    (0..4).all(|b| norm2(&std::array::from_fn(|c| xj[c].lane(b) + sh[c] - xi[c].lane(a))) >= 6.25)
+                })
+                .count();
+            assert!(empty_rows > 0, "no row without a pair inside: the skipped rows go untested");
+            for (lj, what) in [(&[1.0, 1.0, 2.5], "shifted LJ"), (&[0.9, 1.1, 2.5], "other parameters")] {
+                let (a, b) = (
+                    run::<lennard_jones::Shifted, false>(&l, lj, true),
+                    run::<lennard_jones::Shifted, false>(&l, lj, false),
+                );
+                assert!(a == b, "{what}: the force's pullback differs");
+                assert!(a.iter().any(|&v| v != 0), "{what}: a pullback of nothing");
+                let (a, b) = (
+                    run::<lennard_jones::Shifted, true>(&l, lj, true),
+                    run::<lennard_jones::Shifted, true>(&l, lj, false),
+                );
+                assert!(a == b, "{what}: the potential's gradient differs");
+            }
+            let (a, b) = (
+                run::<lennard_jones::ForceShifted, false>(&l, &[1.0, 1.0, 2.5], true),
+                run::<lennard_jones::ForceShifted, false>(&l, &[1.0, 1.0, 2.5], false),
+            );
+            assert!(a == b, "force-shifted LJ: the force's pullback differs");
         }
     }
 

@@ -93,6 +93,7 @@ impl Paired for Plain {
     fn radial<L: Lane>(lj: &Lj, r2: L, _: [L; 4], _colour: L) -> (L, L) {
         lj.shifted_at(r2)
     }
+    #[inline(always)]
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         Some(lj.jet_at(p, r2))
     }
@@ -113,6 +114,7 @@ impl Paired for Shifted {
     }
     /// The shift is a constant: the force's derivatives are the plain term's. The energy's
     /// lose the shift's, ∂V(r_c)/∂p, and ∂V(r_c)/∂r_c = V′(r_c) = r_c s(r_c).
+    #[inline(always)]
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
         let dv = [here.dv[0] - at_rc.dv[0], here.dv[1] - at_rc.dv[1], L::splat(-lj.rc * at_rc.s)];
@@ -137,6 +139,7 @@ impl Paired for ForceShifted {
     /// With V′(r_c) = r_c s(r_c) taken off the force: s − V′(r_c)/r, s_r + V′(r_c)/r³, and the
     /// slope's own derivatives, ∂V′(r_c)/∂σ = r_c ∂s/∂σ(r_c), ∂V′(r_c)/∂r_c = V″(r_c). The
     /// energy V(r) − V(r_c) − (r − r_c)V′(r_c): ∂/∂p of each part, and ∂/∂r_c = −(r − r_c)V″(r_c).
+    #[inline(always)]
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         let (here, at_rc) = (lj.jet_at(p, r2), lj.jet_at(p, lj.rc2));
         let r = r2.sqrt();

@@ -21,6 +21,7 @@ impl Paired for Fast {
     /// Inside 2^{1/6}σ the force is Lennard-Jones's (the cutoff moves with σ, but the force is
     /// zero there, so no pair's force jumps); the energy's + ε adds 1 to ∂V/∂ε (and V is zero at
     /// the cutoff, so its move adds nothing).
+    #[inline(always)]
     fn jet<L: Lane>(lj: &Lj, p: &[f64], r2: L) -> Option<Jet<L>> {
         let jet = lj.jet_at(p, r2);
         Some(Jet { dv: [jet.dv[0] + L::splat(1.0), jet.dv[1], jet.dv[2]], ..jet })
