@@ -7,9 +7,8 @@
 //! AVX: `.cargo/config.toml`), so each operation is one 256-bit instruction on every machine
 //! that runs this build; a build without AVX gets `wide`'s SSE2 or portable code, with the same
 //! bits. (No runtime switch is needed for that: a machine without FMA cannot run Lagra at all.)
-//! Where the CPU has AVX-512, the cluster kernel runs a second build of itself with 32 vector
-//! registers instead of 16 (`clusters::wide_registers`): the same 256-bit instructions, so the
-//! same bits.
+//! Where the CPU has AVX-512, the cluster kernels take two rows a register instead
+//! (`lanes8::F64x8`, `forces::pipelined`), each lane still the scalar formula: the same bits.
 
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
 use wide::f64x4;

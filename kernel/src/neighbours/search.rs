@@ -271,7 +271,7 @@ impl Search<'_> {
         self.portable_part(part, |xi| *xi, touch)
     }
 
-    /// `portable_part` compiled for AVX-512, as the force kernel is (`clusters::kernel`): the
+    /// `portable_part` compiled for AVX-512 (as the force kernel's `pipelined` is): the
     /// sixteen distances of a candidate in one or two instructions a step instead of SSE2's
     /// pairs; the same arithmetic on the same lanes, so the same list.
     #[cfg(target_arch = "x86_64")]
