@@ -3,12 +3,13 @@
 //! formula evaluated one cluster pair ahead of its forces.
 //!
 //! Why ahead: a cluster pair's work is one long chain — loads, separations, r², the formula's
-//! division (~23 cycles on an eight-lane register), its products, then the forces that need
-//! them — and the CPU's scheduler holds only a cluster pair or two of waiting instructions, so
-//! in order it idles on the chain (measured: twice the lanes in a register gained 2%). With the
-//! formula of pair q + 1 issued before the forces of pair q, the forces find their inputs ready
-//! while the next division runs: 300 steps of lj_32k 1.51 → 1.32 s on one thread (Intel Xeon,
-//! 2026-12-07), the divider now the bound (two eight-lane divisions a cluster pair).
+//! division (some twenty cycles' latency, by instruction tables), its products, the forces that
+//! need them — and, as far as timings can tell without performance counters, the CPU's
+//! scheduler holds too few waiting instructions to overlap two chains: twice the lanes in a
+//! register gained 2%, a shorter-throughput division by reciprocal and Newton steps lost. With
+//! the formula of pair q + 1 issued before the forces of pair q, the forces find their inputs
+//! ready while the next division runs: 300 steps of lj_32k 1.51 → 1.32 s on one thread (Intel
+//! Xeon, 2026-12-07), the divider now the bound (two eight-lane divisions a cluster pair).
 //!
 //! The same bits as `clusters::portable`: every lane is its pair's formula, the lanes outside
 //! the reach are +0 as the portable kernel masks them, and the forces and sums are added in the
