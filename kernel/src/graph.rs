@@ -190,7 +190,7 @@ impl LagrangianGraph {
 
     /// v += h·F/m.
     pub fn kick(&self, v: &mut [[f64; 3]], f: &[[f64; 3]], h: f64) {
-        step::kick(v, f, &self.inverse_masses, h);
+        step::kick_on(v, f, &self.inverse_masses, h, self.spread());
     }
 
     /// The rigid bodies turn freely for `steps` steps of `h` (`rigid::free_step`): no term
