@@ -28,6 +28,6 @@ impl Definition for CoulombReactionField {
         let qq = p[0].clone() * s[0].q.clone() * s[1].q.clone();
         // the zero beyond the cutoff must be an energy: k q q / r_c times 0
         let scaled = [qq.clone() / rc.clone()];
-        cut(&scaled, s, rc, |r2| qq * (r2.clone().sqrt().powi(-1) + krf * r2 - crf))
+        cut(&scaled, s, rc.powi(2), |r2| qq * (r2.clone().sqrt().powi(-1) + krf * r2 - crf))
     }
 }

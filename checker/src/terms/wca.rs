@@ -2,8 +2,8 @@
 //! lifted by ε, V = 4ε[(σ/r)¹² − (σ/r)⁶] + ε for r < r_c: purely repulsive, continuous with
 //! its force (the bead–bead repulsion of Kremer–Grest polymers).
 
-use super::lennard_jones::{cut, lj};
-use super::{Definition, Param, Shape, Site, Spec};
+use super::lennard_jones::{cut, lj, prepared};
+use super::{constant, Definition, Param, Shape, Site, Spec};
 use crate::real::Real;
 use crate::units::Dim;
 
@@ -21,8 +21,13 @@ impl Definition for Wca {
     };
 
     fn potential<R: Real>(p: &[R], s: &[&Site<R>]) -> R {
-        let rc = p[1].lift(MINIMUM) * p[1].clone();
-        cut(p, s, rc, |r2| lj(&p[0], &p[1], r2) + p[0].clone())
+        let c = |k| constant::<Self, R>(p, k);
+        cut(p, s, c(2), |r2| lj(&c(0), &c(1), r2) + p[0].clone())
+    }
+
+    /// 4ε, σ², r_c² (`prepared`, r_c = 2^{1/6}σ).
+    fn constants<R: Real>(p: &[R]) -> Vec<R> {
+        prepared(&p[0], &p[1], p[1].lift(MINIMUM) * p[1].clone())
     }
 
     fn reach(p: &[f64]) -> f64 {
