@@ -55,6 +55,19 @@ pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
     }
 }
 
+/// A pass over `n` bodies (or items): `work(true)` on `pool`'s threads where they are enough to
+/// spread (`SPREAD_FROM` or more, and a pool given), else `work(false)` on this thread; clocked
+/// wherever that many would spread at more threads, serial and not clocked below. `work` gives
+/// the same bits either way (each body's arithmetic its own, or a reduction that does not
+/// depend on the split), so the thread count changes none.
+pub fn over<R: Send>(pool: Option<&ThreadPool>, n: usize, work: impl FnOnce(bool) -> R + Send) -> R {
+    let spreads = n >= SPREAD_FROM;
+    pass_if(spreads, || match pool.filter(|_| spreads) {
+        Some(pool) => pool.install(|| work(true)),
+        None => work(false),
+    })
+}
+
 /// `into` made a copy of `from` (in the memory it holds, where that is enough), as a pass in
 /// `BLOCK`s on the pool's threads where `from` is long enough to spread. A large copy is bound
 /// by memory, and more cores draw more of its bandwidth; fresh memory's page faults are taken
@@ -62,10 +75,9 @@ pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
 /// its replays: on one thread they were most of its serial part.
 pub fn copy<T: Copy + Send + Sync>(pool: Option<&ThreadPool>, into: &mut Vec<T>, from: &[T]) {
     into.clear();
-    let spreads = from.len() >= SPREAD_FROM;
-    pass_if(spreads, || match pool.filter(|_| spreads) {
-        Some(pool) => pool.install(|| into.par_extend(from.par_iter().copied().with_min_len(BLOCK))),
-        None => into.extend_from_slice(from),
+    over(pool, from.len(), |on_pool| match on_pool {
+        true => into.par_extend(from.par_iter().copied().with_min_len(BLOCK)),
+        false => into.extend_from_slice(from),
     })
 }
 
@@ -284,6 +296,27 @@ mod tests {
         assert_eq!(spent(), before);
         pass_if(true, nap);
         assert!(spent() - before >= Duration::from_millis(20));
+    }
+
+    /// `over` sends work to the pool only from `SPREAD_FROM` items, clocks it from there with or
+    /// without a pool, and leaves fewer items on this thread, unclocked.
+    #[test]
+    fn a_pass_over_bodies_spreads_and_is_clocked_from_its_threshold() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let on_pool = |on: bool| {
+            nap();
+            (on, rayon::current_thread_index().is_some())
+        };
+        for (pool, n, spreads, clocked) in [
+            (Some(&pool), SPREAD_FROM, true, true),
+            (Some(&pool), SPREAD_FROM - 1, false, false),
+            (None, SPREAD_FROM, false, true),
+            (None, 1, false, false),
+        ] {
+            let before = spent();
+            assert_eq!(over(pool, n, on_pool), (spreads, spreads), "{n} items");
+            assert_eq!(spent() - before >= Duration::from_millis(20), clocked, "{n} items");
+        }
     }
 
     #[test]

@@ -3,8 +3,8 @@
 //! monomorphize around their own code. It knows no term and no solver: forces, the graph and the
 //! solvers all build on it, and it on nothing of theirs.
 
+use crate::spread;
 pub use crate::spread::BLOCK;
-use crate::spread::{self, SPREAD_FROM};
 use crate::state::State;
 use rayon::prelude::*;
 use rayon::ThreadPool;
@@ -25,15 +25,13 @@ pub fn kick(v: &mut [[f64; 3]], f: &[[f64; 3]], inverse: &[f64], h: f64) {
 /// thread it was half the serial part of lj_32k at 256,000 atoms (1.1 ms a kick, 25 in 100 steps
 /// when progress is shown).
 pub fn kick_on(v: &mut [[f64; 3]], f: &[[f64; 3]], inverse: &[f64], h: f64, spread: Option<&ThreadPool>) {
-    match spread {
-        Some(pool) => spread::pass(|| {
-            pool.install(|| {
-                let bodies = v.par_chunks_mut(BLOCK).zip(f.par_chunks(BLOCK)).zip(inverse.par_chunks(BLOCK));
-                bodies.for_each(|((v, f), w)| kick(v, f, w, h))
-            })
-        }),
-        None => spread::pass_if(v.len() >= SPREAD_FROM, || kick(v, f, inverse, h)),
-    }
+    spread::over(spread, v.len(), |on_pool| match on_pool {
+        true => {
+            let bodies = v.par_chunks_mut(BLOCK).zip(f.par_chunks(BLOCK)).zip(inverse.par_chunks(BLOCK));
+            bodies.for_each(|((v, f), w)| kick(v, f, w, h))
+        }
+        false => kick(v, f, inverse, h),
+    })
 }
 
 /// x += h·v.
@@ -69,18 +67,15 @@ pub fn kick_drift(
         }
         *f = [0.0; 3];
     };
-    // A few bodies never spread, at any thread count: serial, and not clocked (wrapped in the
+    // (a few bodies never spread, at any thread count: serial, and not clocked; wrapped in the
     // clock, a one-body step took 38–51 ns against 30)
-    match spread {
-        Some(pool) => spread::pass(|| {
-            pool.install(|| {
-                let bodies = x.par_iter_mut().zip(v.par_iter_mut()).zip(f.par_iter_mut()).zip(inverse.par_iter());
-                bodies.with_min_len(BLOCK).for_each(one)
-            })
-        }),
-        None if x.len() < SPREAD_FROM => x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one),
-        None => spread::pass(|| x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one)),
-    }
+    spread::over(spread, x.len(), |on_pool| match on_pool {
+        true => {
+            let bodies = x.par_iter_mut().zip(v.par_iter_mut()).zip(f.par_iter_mut()).zip(inverse.par_iter());
+            bodies.with_min_len(BLOCK).for_each(one)
+        }
+        false => x.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(inverse).for_each(one),
+    })
 }
 
 /// The step counter and the clock after one step.

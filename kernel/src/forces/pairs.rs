@@ -8,7 +8,7 @@ use super::groups::{overflowed, Finite, Rows, FAR, OVERFLOW};
 use super::{stride_alone, Force, Frame, Paired, Parts, Pool, Singularity};
 use crate::lanes::F64x4;
 use crate::neighbours::{Cluster, Neighbours, Pair, EMPTY, LANES};
-use crate::spread::{self, SPREAD_FROM};
+use crate::spread;
 use crate::step::{Stride, BLOCK};
 use crate::sum::Sum;
 use crate::traverse;
@@ -215,11 +215,9 @@ impl<T: Paired + Send + Sync + 'static> Pairs<T> {
                     };
                     std::array::from_fn(|k| F64x4::new(std::array::from_fn(|a| at(a, k))))
                 };
-                let spreads = g.len() >= SPREAD_FROM;
-                spread::pass_if(spreads, || match self.pool.as_deref().filter(|_| spreads) {
-                    Some(pool) => pool
-                        .install(|| (0..l.clusters()).into_par_iter().with_min_len(BLOCK / LANES).map(one).collect()),
-                    None => (0..l.clusters()).map(one).collect(),
+                spread::over(self.pool.as_deref(), g.len(), |on_pool| match on_pool {
+                    true => (0..l.clusters()).into_par_iter().with_min_len(BLOCK / LANES).map(one).collect(),
+                    false => (0..l.clusters()).map(one).collect(),
                 })
             }
         };
@@ -347,10 +345,9 @@ impl<T: Paired + Send + Sync + 'static> Force for Pairs<T> {
             false => self.through_list::<{ clusters::FORCES_ONLY }>(&l, s, f, &[])?,
         };
         let finite = |b: &[f64; 3]| b.iter().all(|c| c.is_finite());
-        let big = f.len() >= SPREAD_FROM;
-        let all_finite = spread::pass_if(big, || match self.pool.as_ref().filter(|_| big) {
-            Some(pool) => pool.install(|| f.par_iter().with_min_len(BLOCK).all(finite)),
-            None => f.iter().all(finite),
+        let all_finite = spread::over(self.pool.as_deref(), f.len(), |on_pool| match on_pool {
+            true => f.par_iter().with_min_len(BLOCK).all(finite),
+            false => f.iter().all(finite),
         });
         if energy.is_finite() && all_finite {
             return Ok(energy);

@@ -205,7 +205,6 @@ impl Neighbours {
         // two largest displacements decide (less often than "one body moved half the skin",
         // and as exact). The 1e-9 keeps the test on the safe side of rounding.
         let updating = Instant::now();
-        let spread = pool.filter(|_| x.len() >= SPREAD_FROM);
         let top_two = |(first, second): (f64, f64), d2: f64| {
             if d2 > second {
                 if d2 > first {
@@ -220,15 +219,14 @@ impl Neighbours {
         let moved =
             |(p, q): (&[f64; 3], &[f64; 3])| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
         // (the two largest of a set are the same whichever way it is split)
-        let (first, second) = spread::pass_if(x.len() >= SPREAD_FROM, || match spread {
-            Some(pool) => pool.install(|| {
-                x.par_iter()
-                    .zip(&self.at)
-                    .with_min_len(BLOCK)
-                    .fold(|| (0.0, 0.0), |t, pq| top_two(t, moved(pq)))
-                    .reduce(|| (0.0, 0.0), |a, b| top_two(top_two(a, b.0), b.1))
-            }),
-            None => x.iter().zip(&self.at).fold((0.0, 0.0), |t, pq| top_two(t, moved(pq))),
+        let (first, second) = spread::over(pool, x.len(), |on_pool| match on_pool {
+            true => x
+                .par_iter()
+                .zip(&self.at)
+                .with_min_len(BLOCK)
+                .fold(|| (0.0, 0.0), |t, pq| top_two(t, moved(pq)))
+                .reduce(|| (0.0, 0.0), |a, b| top_two(top_two(a, b.0), b.1)),
+            false => x.iter().zip(&self.at).fold((0.0, 0.0), |t, pq| top_two(t, moved(pq))),
         });
         let mut built = Duration::ZERO;
         if self.at.len() != x.len() || !(first.sqrt() + second.sqrt() < self.skin * (1.0 - 1e-9)) {
@@ -249,11 +247,9 @@ impl Neighbours {
             }
             *cluster = lanes.map(F64x4::new);
         };
-        spread::pass_if(x.len() >= SPREAD_FROM, || match spread {
-            Some(pool) => {
-                pool.install(|| self.x.par_iter_mut().enumerate().with_min_len(BLOCK / LANES).for_each(gather))
-            }
-            None => self.x.iter_mut().enumerate().for_each(gather),
+        spread::over(pool, x.len(), |on_pool| match on_pool {
+            true => self.x.par_iter_mut().enumerate().with_min_len(BLOCK / LANES).for_each(gather),
+            false => self.x.iter_mut().enumerate().for_each(gather),
         });
         self.spent.updates += updating.elapsed() - built;
     }
