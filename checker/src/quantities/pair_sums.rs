@@ -51,10 +51,15 @@ impl<R: PairSum> Lifted<R> {
 /// double loop's order, or, for `Outward`, sixteen pairs at a time in `Lanes` (each pair gets the
 /// same bits as alone) and added exactly in any order (`ExactSum`).
 pub trait PairSum: Real + Send + Sync {
-    /// `start` + Σ `each(i)` over i in 0..n: one after another, or for `Outward` exactly, in
-    /// pieces on up to `threads` of the helpers (an exact sum has no order: the same bits).
-    fn sum_over(start: Self, n: usize, _threads: usize, each: impl Fn(usize) -> Self + Sync) -> Self {
-        (0..n).map(each).fold(start, Self::add)
+    /// Σ `each(site)` over `l`'s sites, K sums in one pass: one after another, or for
+    /// `Outward` exactly, in pieces on up to `l.threads` of the helpers (an exact sum has no
+    /// order: the same bits).
+    fn sum_over<const K: usize>(l: &Lifted<Self>, each: impl Fn(&Site<Self>) -> [Self; K] + Sync) -> [Self; K] {
+        let mut sums = std::array::from_fn(|_| l.zero.clone());
+        for e in l.sites.iter().map(each) {
+            sums.iter_mut().zip(e).for_each(|(s, e)| *s = s.clone() + e);
+        }
+        sums
     }
 
     /// `acc` + the potential of instance `n` (of `kind`) at each pair `near` holds.
@@ -76,10 +81,12 @@ impl PairSum for Outward {
     /// A piece is `SUMMED_APART` terms or more: handing one out costs what summing a few
     /// thousand does (at 256,000 bodies the kinetic energy and momentum, ~15 ms on one thread,
     /// were most of what the last checkpoint left to one thread).
-    fn sum_over(start: Self, n: usize, threads: usize, each: impl Fn(usize) -> Self + Sync) -> Self {
+    fn sum_over<const K: usize>(l: &Lifted<Self>, each: impl Fn(&Site<Self>) -> [Self; K] + Sync) -> [Self; K] {
+        let (n, threads) = (l.sites.len(), l.threads);
         let pieces = (4 * threads).min(n / SUMMED_APART).max(1);
-        let sums = in_order(pieces, threads, |k| exact_bounds((n * k / pieces..n * (k + 1) / pieces).map(&each)));
-        start + outward(&merged(&sums))
+        let piece = |k: usize| &l.sites[n * k / pieces..n * (k + 1) / pieces];
+        let sums = in_order(pieces, threads, |k| exact_bounds(piece(k).iter().map(&each)));
+        std::array::from_fn(|c| l.zero + outward(&merged(sums.iter().map(|s| &s[c]))))
     }
 
     /// Σ lo and Σ hi over the pairs, each exact (`ExactSum`) and rounded once outward: they
@@ -145,15 +152,14 @@ impl Lifted<Outward> {
     }
 }
 
-/// Σ lo and Σ hi of the enclosures, each exact.
-fn exact_bounds(each: impl Iterator<Item = Outward>) -> (ExactSum, ExactSum) {
-    let (mut lo, mut hi) = (ExactSum::default(), ExactSum::default());
-    for e in each {
-        let (a, b) = e.bounds();
-        lo.add(a);
-        hi.add(b);
+/// Σ lo and Σ hi of the enclosures, each exact, for each of K sums.
+fn exact_bounds<const K: usize>(each: impl Iterator<Item = [Outward; K]>) -> [(ExactSum, ExactSum); K] {
+    let mut sums: [(ExactSum, ExactSum); K] = std::array::from_fn(|_| Default::default());
+    for (c, e) in each.flat_map(|e| e.into_iter().enumerate()) {
+        sums[c].0.add(e.bounds().0);
+        sums[c].1.add(e.bounds().1);
     }
-    (lo, hi)
+    sums
 }
 
 /// Exact sums of lows and highs added together.
@@ -176,7 +182,7 @@ fn outward((lo, hi): &(ExactSum, ExactSum)) -> Outward {
 /// each partial sum (at 256,000 atoms more than the momentum's round-off budget), and its bits
 /// do not depend on the order of the terms.
 pub fn sum_exactly(each: impl Iterator<Item = Outward>) -> Outward {
-    outward(&exact_bounds(each))
+    outward(&exact_bounds(each.map(|e| [e]))[0])
 }
 
 /// The reach a pair term's broad phase is asked for: the term's, with a relative margin of
