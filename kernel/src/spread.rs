@@ -59,13 +59,16 @@ pub fn pass_if<R>(spreads: bool, work: impl FnOnce() -> R) -> R {
 /// spread (`SPREAD_FROM` or more, and a pool given), else `work(false)` on this thread; clocked
 /// wherever that many would spread at more threads, serial and not clocked below. `work` gives
 /// the same bits either way (each body's arithmetic its own, or a reduction that does not
-/// depend on the split), so the thread count changes none.
+/// depend on the split), so the thread count changes none. (The few bodies' way is tested
+/// first and calls `work` with nothing around it: through `pass_if`'s closure, the one-body
+/// step took 40 ns against 24.)
+#[inline(always)]
 pub fn over<R: Send>(pool: Option<&ThreadPool>, n: usize, work: impl FnOnce(bool) -> R + Send) -> R {
-    let spreads = n >= SPREAD_FROM;
-    pass_if(spreads, || match pool.filter(|_| spreads) {
-        Some(pool) => pool.install(|| work(true)),
-        None => work(false),
-    })
+    match (n >= SPREAD_FROM, pool) {
+        (false, _) => work(false),
+        (true, Some(pool)) => pass(|| pool.install(|| work(true))),
+        (true, None) => pass(|| work(false)),
+    }
 }
 
 /// `into` made a copy of `from` (in the memory it holds, where that is enough), as a pass in
