@@ -423,4 +423,20 @@ mod tests {
         same(&plain, &watched);
         assert_eq!(reached, [1 << 19, 1 << 20, 1_200_000]);
     }
+
+    /// Past 65,536 bodies a million atom-steps is fewer than 16 steps: progress stops every 16
+    /// (`FEWEST_STEPS_A_STOP`), and the run ends with the bits it has without it.
+    #[test]
+    fn progress_stops_no_more_often_than_every_sixteen_steps() {
+        let scene = compile(
+            "scene s { entity atom { mass: 1 } lattice { type: atom, kind: sc, density: 1, cells: [51, 51, 51], temperature: 1, seed: 3 }
+               solver { dt: 0.01, steps: 40 } }",
+        )
+        .unwrap();
+        assert!(scene.x0.len() > 1 << 17, "{} bodies: a million atom-steps is under 8 steps", scene.x0.len());
+        let plain = run(&scene, Options::plain(None)).unwrap();
+        let (watched, reached) = with_progress(&scene);
+        same(&plain, &watched);
+        assert_eq!(reached, [16, 32, 40]);
+    }
 }
