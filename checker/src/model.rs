@@ -196,6 +196,15 @@ pub struct Pin {
     pub on_b: [f64; 3],
 }
 
+impl Pin {
+    /// Whether it holds bodies i and j together (either way round). Two bodies a joint holds
+    /// may meet at it: they make no contact in the kernel, and `no_penetration` does not measure
+    /// their overlap.
+    pub fn joins(&self, i: usize, j: usize) -> bool {
+        self.a == Some(i) && self.b == j || self.a == Some(j) && self.b == i
+    }
+}
+
 /// A state of the system as the kernel produced it, exactly.
 #[derive(Clone, Copy, Debug)]
 pub struct Snapshot<'a> {

@@ -1,6 +1,6 @@
-//! Solids at rest and in contact: how deep two rigid bodies overlap or a body sinks below the
-//! floor (`no_penetration`), and how fast the fastest point of a body moves (`resting`),
-//! evaluated in `R` on one state.
+//! Solids at rest and in contact: how deep two rigid bodies overlap (but two a joint holds
+//! together, which may meet at it) or a body sinks below the floor (`no_penetration`), and how
+//! fast the fastest point of a body moves (`resting`), evaluated in `R` on one state.
 //!
 //! Depth is bounded by separating axes. For convex solids A, B centred at c_A, c_B and any
 //! direction n ≠ 0, the overlap of their shadows on n, (h_A(n) + h_B(n) − |n·(c_B − c_A)|)/|n|
@@ -124,7 +124,8 @@ fn overlap<R: Enclosure>(a: &Placed<R>, b: &Placed<R>) -> R {
 /// Each pair of solids that may touch, found in binary64: swept along x with their reaches,
 /// then tried for a separating direction (`Rough::apart`). A pair left out is certainly apart,
 /// so overlaps by nothing; each test's margin is far above binary64's rounding of it (1e-9 of
-/// the sizes involved, against ~1e-15).
+/// the sizes involved, against ~1e-15). Two solids a joint holds together are left out too:
+/// they may meet at the joint (`Pin::joins`).
 fn near_solids(model: &Model, s: &Snapshot) -> Vec<(usize, usize)> {
     let x = s.x;
     let rough = Rough::all(model, s);
@@ -140,7 +141,8 @@ fn near_solids(model: &Model, s: &Snapshot) -> Vec<(usize, usize)> {
                 break;
             }
             let beyond_reach = (0..3).any(|c| (x[j][c] - x[i][c]).abs() > ri + rj + margin);
-            if !beyond_reach && !rough[i].apart(&rough[j], ri + rj) {
+            let joined = model.pins.iter().any(|p| p.joins(i, j));
+            if !beyond_reach && !joined && !rough[i].apart(&rough[j], ri + rj) {
                 near.push((i.min(j), i.max(j)));
             }
         }
@@ -201,7 +203,7 @@ impl Rough {
 #[cfg(test)]
 pub(crate) mod tests {
     use crate::enclosure::Enclosure;
-    use crate::model::{Body, Extent, Floor, Model, Snapshot, Solid, UnitSystem};
+    use crate::model::{Body, Extent, Floor, Model, Pin, Snapshot, Solid, UnitSystem};
     use crate::outward::Outward;
     use crate::quantities::Lifted;
     use proptest::prelude::*;
@@ -248,6 +250,23 @@ pub(crate) mod tests {
         assert_eq!(depth(&m, &[[0.0; 3], [1.1, 0.0, 0.0]], &[REST, REST]), (0.0, 0.0));
         // bounding balls apart: never even tried
         assert_eq!(depth(&m, &[[0.0; 3], [5.0, 0.0, 0.0]], &[REST, REST]), (0.0, 0.0));
+    }
+
+    /// Two cubes a joint holds together may meet at it: their overlap is not measured, a third
+    /// cube's with either is, and a pin to the world leaves nothing out.
+    #[test]
+    fn solids_a_joint_holds_together_are_not_measured_against_each_other() {
+        let mut m = model(vec![solid(CUBE), solid(CUBE), solid(CUBE)], None);
+        let pin = |a: Option<usize>, b: usize| Pin { a, b, on_a: [0.45, 0.0, 0.0], on_b: [-0.45, 0.0, 0.0] };
+        let x = [[0.0; 3], [0.9, 0.0, 0.0], [5.0, 0.0, 0.0]];
+        let overlapped = depth(&m, &x, &[REST; 3]);
+        assert!(overlapped.0 <= 0.1 && 0.1 <= overlapped.1, "{overlapped:?}");
+        m.pins = vec![pin(None, 0), pin(None, 1)];
+        assert_eq!(depth(&m, &x, &[REST; 3]), overlapped);
+        m.pins = vec![pin(Some(1), 0)];
+        assert_eq!(depth(&m, &x, &[REST; 3]), (0.0, 0.0));
+        let (lo, hi) = depth(&m, &[x[0], x[1], [-0.8, 0.0, 0.0]], &[REST; 3]);
+        assert!(lo <= 0.2 && 0.2 <= hi && hi - 0.2 < 1e-14, "[{lo}, {hi}]");
     }
 
     #[test]

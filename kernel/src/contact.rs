@@ -125,8 +125,7 @@ impl Solids {
                     });
                 found.into_iter().flatten()
             };
-        let pinned =
-            |i: usize, j: usize| self.pins.iter().any(|p| p.a == Some(i) && p.b == j || p.a == Some(j) && p.b == i);
+        let pinned = |i: usize, j: usize| self.pins.iter().any(|p| p.joins(i, j));
         let pair = |i: usize, j: usize| {
             let (si, sj) = (self.solids[i].expect("a solid"), self.solids[j].expect("a solid"));
             let mu = (si.friction * sj.friction).sqrt();

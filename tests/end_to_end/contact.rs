@@ -156,7 +156,7 @@ fn a_hinged_chain_at_ten_sweeps_keeps_its_energy_within_five_percent() {
     assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let claims = report["claims"].as_array().unwrap();
-    assert_eq!(claims.len(), 3, "{claims:?}");
+    assert_eq!(claims.len(), 4, "{claims:?}");
     assert!(claims.iter().all(|c| c["status"] == "PASS"), "{claims:?}");
 }
 
