@@ -5,13 +5,13 @@
 use super::{Cluster, Pair, CENTRE, EMPTY, LANES};
 use crate::lanes::{norm2, F64x4, Lane};
 use crate::pieces::runs;
-use crate::spread::{self, each};
+use crate::spread::{self, each, share};
 use crate::step::BLOCK;
 use lagra_checker::model::Cell;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// The parts one after another, `map(part, value)` applied to each value, each part copied on
 /// the pool's threads if there is one: the same values either way.
@@ -59,6 +59,9 @@ pub(super) fn far(w: &[[f64; 3]], r: f64, p: f64, spread: Option<&ThreadPool>) -
         + 1.0;
     move |slot| [base + (4.0 * r + p) * slot as f64, base, base]
 }
+
+/// Bodies a block deals into the columns (`Columns::clusters`): 16 blocks at 256,000 bodies.
+const DEAL: usize = 4 * BLOCK;
 
 /// An axis-aligned box around a cluster's bodies.
 #[derive(Clone, Copy)]
@@ -127,25 +130,35 @@ impl Columns {
     pub(super) fn clusters(&self, w: &[[f64; 3]], spread: Option<&ThreadPool>) -> (Vec<u32>, Vec<usize>) {
         let columns = self.n[0] * self.n[1];
         let column: Vec<usize> = each(spread, w.len(), |i| self.index(0, w[i][0]) + self.n[0] * self.index(1, w[i][1]));
-        // counted and dealt into the columns through atomic cursors (whose order within a column
-        // varies with the threads; the sort by z below puts it right)
-        let counts: Vec<AtomicUsize> = (0..columns).map(|_| AtomicUsize::new(0)).collect();
-        let deal = |f: &(dyn Fn(usize, usize) + Sync)| {
-            spread::pass(|| match spread {
-                Some(pool) => {
-                    pool.install(|| column.par_iter().enumerate().with_min_len(BLOCK).for_each(|(i, &c)| f(i, c)))
-                }
-                None => column.iter().enumerate().for_each(|(i, &c)| f(i, c)),
-            })
-        };
-        deal(&|_, c| _ = counts[c].fetch_add(1, Relaxed));
+        // counted and dealt into the columns block by block, each block of bodies from cursors
+        // of its own (no cursor shared between threads, which on many cores would pass each
+        // other its cache lines at every body), the blocks' places in a column in block order:
+        // a column's bodies come in increasing order. The blocks follow the bodies, never the
+        // threads, and their tallies take at most four counters a body (columns ≤ bodies / 4).
+        let blocks = w.len().div_ceil(DEAL).min(4 * w.len() / columns).max(1);
+        let block = |b: usize| w.len() * b / blocks..w.len() * (b + 1) / blocks;
+        let mut places: Vec<Vec<u32>> = share(spread, blocks, 1, |b| {
+            let mut tally = vec![0u32; columns];
+            column[block(b)].iter().for_each(|&c| tally[c] += 1);
+            tally
+        });
+        // each block's first place in each column (and `count`, each column's first place)
         let mut count = vec![0usize; columns + 1];
-        for (c, n) in counts.iter().enumerate() {
-            count[c + 1] = count[c] + n.load(Relaxed);
+        for c in 0..columns {
+            let mut at = count[c] as u32;
+            for tally in &mut places {
+                (tally[c], at) = (at, at + tally[c]);
+            }
+            count[c + 1] = at as usize;
         }
-        let next: Vec<AtomicUsize> = count[..columns].iter().map(|&c| AtomicUsize::new(c)).collect();
         let dealt: Vec<AtomicU32> = each(spread, w.len(), |_| AtomicU32::new(0));
-        deal(&|i, c| dealt[next[c].fetch_add(1, Relaxed)].store(i as u32, Relaxed));
+        share(spread, blocks, 1, |b| {
+            let mut next = places[b].clone();
+            for i in block(b) {
+                dealt[next[column[i]] as usize].store(i as u32, Relaxed);
+                next[column[i]] += 1;
+            }
+        });
         let mut order: Vec<u32> = each(spread, w.len(), |k| dealt[k].load(Relaxed));
         // each column's run sorted by z (then by body: a total order, so the same runs however
         // the columns are shared out)

@@ -126,6 +126,10 @@ fn the_list_is_the_same_on_any_number_of_threads() {
         };
         let one = built(1);
         assert!(one.2.len() > 3 * n, "{}", one.2.len());
+        // every body in one slot (20,000 bodies are dealt into the columns in two blocks)
+        let mut slotted: Vec<u32> = one.0.iter().copied().filter(|&b| b != EMPTY).collect();
+        slotted.sort_unstable();
+        assert!(slotted.iter().copied().eq(0..n as u32));
         assert!(built(2) == one && built(3) == one && built(7) == one);
     }
 }
