@@ -141,8 +141,8 @@ fn near_solids(model: &Model, s: &Snapshot) -> Vec<(usize, usize)> {
                 break;
             }
             let beyond_reach = (0..3).any(|c| (x[j][c] - x[i][c]).abs() > ri + rj + margin);
-            let joined = model.pins.iter().any(|p| p.joins(i, j));
-            if !beyond_reach && !joined && !rough[i].apart(&rough[j], ri + rj) {
+            let joined = || model.pins.iter().any(|p| p.joins(i, j));
+            if !beyond_reach && !joined() && !rough[i].apart(&rough[j], ri + rj) {
                 near.push((i.min(j), i.max(j)));
             }
         }
