@@ -37,7 +37,7 @@ fn body() -> impl Strategy<Value = Body3> {
 
 /// The term evaluated on `bodies` (as many as its shape takes) in `proto`'s arithmetic, from
 /// the bare parameters, or with its constants worked out beforehand as `Lifted` does.
-fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R, prepared: bool) -> (R, Option<R>) {
+fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R, prepared: bool) -> (R, [Option<R>; 2]) {
     let n = kind.spec().shape.arity();
     let sites: Vec<Site<R>> = bodies[..n].iter().map(|b| site(proto, b.0, b.1, b.2, b.3)).collect();
     let s: Vec<&Site<R>> = sites.iter().collect();
@@ -45,7 +45,7 @@ fn eval<R: Real>(kind: Kind, params: &[f64], bodies: &[Body3], proto: &R, prepar
     if prepared {
         p.extend(kind.constants(&p));
     }
-    (kind.potential(&p, &s), kind.rayleigh(&p, &s))
+    (kind.potential(&p, &s), [kind.rayleigh(&p, &s), kind.power(&p, &s)])
 }
 
 proptest! {
@@ -76,7 +76,8 @@ proptest! {
             prop_assert!(bits(prepared.bounds()) == bits(iv.bounds()), "{kind:?}");
             // where the definition is undefined (FENE past R₀) there is nothing to enclose
             prop_assert!(hp.is_nan() || inside(iv, &hp) || unknown_allowed && iv.bounds().0.is_nan(), "{kind:?}: {iv:?} does not hold {hp}");
-            if let (Some(a), Some(b)) = (iv_f, hp_f) {
+            // the dissipation function, and the power whose integral is an energy balance's heat
+            for (a, b) in iv_f.into_iter().zip(hp_f).filter_map(|(a, b)| a.zip(b)) {
                 prop_assert!(b.is_nan() || inside(a, &b), "{kind:?} dissipation: {a:?} does not hold {b}");
             }
         }

@@ -47,11 +47,11 @@ const PARAMS: &[Param] = &[
     Param::scalar("beta", Dim::NONE).or(0.0),
 ];
 
-/// `inside(r², q)` while q = r/h < 2, zero (as `zero`) beyond.
-fn within<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>, zero: R, inside: impl FnOnce(R, R) -> R) -> R {
+/// `inside(r², q)` while q = r/h < 2, zero (as `zero()`, a value of its dimension) beyond.
+fn within<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>, zero: impl Fn() -> R, inside: impl FnOnce(R, R) -> R) -> R {
     let r2 = norm2(&sub3(&a.x, &b.x));
     let reach2 = (p[H].lift(SUPPORT) * p[H].clone()).powi(2);
-    select(r2.lt(&reach2), || inside(r2.clone(), r2.clone().sqrt() / p[H].clone()), || zero.lift(0.0) * zero)
+    select(r2.lt(&reach2), || inside(r2.clone(), r2.clone().sqrt() / p[H].clone()), || zero().lift(0.0) * zero())
 }
 
 impl<K: Smoothing> Definition for TaitFluid<K> {
@@ -64,7 +64,7 @@ impl<K: Smoothing> Definition for TaitFluid<K> {
 
     /// m_b W(|xₐ − x_b|).
     fn density<R: Real>(p: &[R], a: &Site<R>, b: &Site<R>) -> Option<R> {
-        let zero = b.m.clone() / p[H].clone().powi(3);
+        let zero = || b.m.clone() / p[H].clone().powi(3);
         Some(within(p, a, b, zero, |_, q| K::weight(&p[H], b.m.clone(), q)))
     }
 
@@ -117,22 +117,27 @@ impl<K: Smoothing> Definition for TaitFluid<K> {
 }
 
 /// `f(k₁, k₂, s)` for a pair approaching (s = v_ab·x_ab < 0) within reach, with
-/// k₁ = mₐm_b g α c₀ h/(ρ₀D) and k₂ = mₐm_b g β h²/(ρ₀D²); zero (as a power) otherwise.
+/// k₁ = mₐm_b g α c₀ h/(ρ₀D) and k₂ = mₐm_b g β h²/(ρ₀D²); zero (as a power) otherwise. The
+/// approach is asked first: a pair moving apart (about half of them) costs its closing speed
+/// alone, not the kernel's slope it would be multiplied by.
 fn viscous<K: Smoothing, R: Real>(p: &[R], s: &[&Site<R>], f: impl FnOnce(R, R, R) -> R) -> R {
     let (a, b) = (s[0], s[1]);
     let closing = dot3(&sub3(&a.v, &b.v), &sub3(&a.x, &b.x));
     let h = p[H].clone();
     // a power's dimension, for the zero branches: m v² / t
-    let zero = a.m.clone() * norm2(&a.v) * p[C0].clone() / h.clone();
+    let zero = || a.m.clone() * norm2(&a.v) * p[C0].clone() / h.clone();
     let approaching = closing.lt(&closing.lift(0.0));
-    within(p, a, b, zero.clone(), |r2, q| {
-        let g = K::g(&h, q);
-        let d = r2 + h.lift(0.01) * h.clone().powi(2);
-        let mm = a.m.clone() * b.m.clone() * g / p[RHO0].clone();
-        let k1 = mm.clone() * p[ALPHA].clone() * p[C0].clone() * h.clone() / d.clone();
-        let k2 = mm * p[BETA].clone() * h.clone().powi(2) / d.powi(2);
-        select(approaching, || f(k1, k2, closing.clone()), || zero.lift(0.0) * zero.clone())
-    })
+    let near = || {
+        within(p, a, b, zero, |r2, q| {
+            let g = K::g(&h, q);
+            let d = r2 + h.lift(0.01) * h.clone().powi(2);
+            let mm = a.m.clone() * b.m.clone() * g / p[RHO0].clone();
+            let k1 = mm.clone() * p[ALPHA].clone() * p[C0].clone() * h.clone() / d.clone();
+            let k2 = mm * p[BETA].clone() * h.clone().powi(2) / d.powi(2);
+            f(k1, k2, closing.clone())
+        })
+    };
+    select(approaching, near, || zero().lift(0.0) * zero())
 }
 
 #[cfg(test)]
