@@ -21,8 +21,8 @@ pub fn pairs<E>(
     reach: Option<f64>,
     mut visit: impl FnMut(usize, usize, [f64; 3]) -> Result<(), E>,
 ) -> Result<(), E> {
-    let images = Images::of(cell);
     let Some(binned) = reach.and_then(|r| Binned::new(x, cell, r)) else {
+        let images = Images::of(cell);
         for i in 0..x.len() {
             for j in i + 1..x.len() {
                 visit(i, j, images.image(sub(&x[j], &x[i])))?;
@@ -30,9 +30,21 @@ pub fn pairs<E>(
         }
         return Ok(());
     };
-    let order = &binned.order;
+    pairs_in(x, cell, &binned, 0..binned.cells(), visit)
+}
+
+/// `pairs` for the bodies of `binned`'s cells `cells` (`Binned::each_in`): over consecutive
+/// ranges of cells that cover them all, each pair once, in the order `pairs` visits them.
+pub fn pairs_in<E>(
+    x: &[[f64; 3]],
+    cell: &Option<Cell>,
+    binned: &Binned,
+    cells: Range<usize>,
+    mut visit: impl FnMut(usize, usize, [f64; 3]) -> Result<(), E>,
+) -> Result<(), E> {
+    let (images, order) = (Images::of(cell), &binned.order);
     let mut result = Ok(());
-    binned.each(|b, runs| {
+    binned.each_in(cells, |b, runs| {
         let i = order[b];
         for (run, _) in runs {
             for &j in &order[run.clone()] {
@@ -79,16 +91,12 @@ impl Binned {
         (0..parts).map(|k| bound(k)..bound(k + 1)).collect()
     }
 
-    /// Calls `visit(b, runs)` for every position b in cell order, with the runs of positions
-    /// whose bodies it pairs with (each pair once over all calls): in its own cell the ones after
-    /// it, in the stencil's cells ahead of its cell all of them. Each run carries its `image`
-    /// (0..27, axis x least significant, digit 0/1/2 for −L/0/+L): for bodies wrapped into the box,
-    /// the box shift to add to xⱼ − xᵢ, so that no division or rounding is needed per pair.
-    pub fn each(&self, visit: impl FnMut(usize, &[(Range<usize>, u8)])) {
-        self.each_in(0..self.grid.cells(), visit)
-    }
-
-    /// `each`, for the positions in the cells `cells` only.
+    /// Calls `visit(b, runs)` for every position b of the cells `cells` in cell order, with the
+    /// runs of positions whose bodies it pairs with (each pair once over all the cells): in its
+    /// own cell the ones after it, in the stencil's cells ahead of its cell all of them. Each run
+    /// carries its `image` (0..27, axis x least significant, digit 0/1/2 for −L/0/+L): for bodies
+    /// wrapped into the box, the box shift to add to xⱼ − xᵢ, so that no division or rounding is
+    /// needed per pair.
     pub fn each_in(&self, cells: Range<usize>, mut visit: impl FnMut(usize, &[(Range<usize>, u8)])) {
         let mut runs: Vec<(Range<usize>, u8)> = Vec::with_capacity(self.grid.stencil.len() + 1);
         let mut shell = Vec::with_capacity(self.grid.stencil.len());

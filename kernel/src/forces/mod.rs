@@ -299,7 +299,7 @@ pub fn group(kind: Kind, t: &[(usize, &TermInstance)], m: &Model, pool: &Pool) -
         Kind::ContactFloor => Fields::<contact_floor::Fast>::boxed(kind, t),
         Kind::MagneticField => Fields::<magnetic_field::Fast>::boxed(kind, t),
         Kind::Wall => Fields::<wall::Fast>::boxed(kind, t),
-        Kind::Sph | Kind::SphCubicSpline => sph::Fluid::boxed(kind, t, m),
+        Kind::Sph | Kind::SphCubicSpline => sph::Fluid::boxed(kind, t, m, pool),
     }
 }
 
