@@ -228,7 +228,7 @@ impl<R: PairSum> Lifted<R> {
     pub fn dissipated_power(&self, model: &Model) -> R {
         // only the instances that can dissipate: a conservative term is never visited
         let term = |n: usize, s: &[&Site<R>]| model.terms[n].kind.power(&self.params[n], s);
-        let pairs = self.in_chunks((self.zero.clone(), R::add), self.one_by_one(&term, R::add));
+        let pairs = |n: usize, acc: R, near: &Neighbourhood| R::add_powers(self, acc, model.terms[n].kind, n, near);
         self.sum(model, |t| t.dissipates(), (self.zero.clone(), R::add), term, pairs)
     }
 

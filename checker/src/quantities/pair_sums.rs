@@ -12,7 +12,7 @@ use crate::mpfi::Mpfi;
 use crate::outward::lanes::{Lanes, WIDTH};
 use crate::outward::Outward;
 use crate::real::Real;
-use crate::terms::{Kind, Shape, Site};
+use crate::terms::{Kind, Reads, Shape, Site};
 use rug::float::Round;
 
 impl<R: PairSum> Lifted<R> {
@@ -70,6 +70,22 @@ pub trait PairSum: Real + Send + Sync {
         };
         l.in_chunks((l.zero.clone(), Self::add), chunk)(n, acc, near)
     }
+
+    /// `acc` + the power instance `n` (of `kind`, a dissipating one) dissipates at each pair
+    /// `near` holds.
+    fn add_powers(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
+        let term = |n: usize, s: &[&Site<Self>]| kind.power(&l.params[n], s);
+        let pairs = l.in_chunks((l.zero.clone(), Self::add), l.one_by_one(&term, Self::add));
+        pairs(n, acc, near)
+    }
+}
+
+/// What a sum over pairs in `Lanes` evaluates at each: a definition's potential, or the power
+/// its dissipation function removes.
+#[derive(Clone, Copy)]
+pub(super) enum Summed {
+    Potential,
+    Power,
 }
 
 impl PairSum for f64 {}
@@ -94,19 +110,25 @@ impl PairSum for Outward {
     /// order the pairs come in, so the broad phase lists them in whatever order is fastest
     /// (`each_unordered`) and in parts on `threads` threads.
     fn add_potentials(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
-        let [(lo, hi)] = l.exact_lane_sums(kind, n, near, |_| Some(0));
-        acc + Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up))
+        let [sums] = l.exact_lane_sums((kind, Summed::Potential), n, near, |_| Some(0));
+        acc + outward(&sums)
+    }
+
+    /// As the potentials: sixteen pairs at a time, Σ lo and Σ hi exact and rounded once.
+    fn add_powers(l: &Lifted<Self>, acc: Self, kind: Kind, n: usize, near: &Neighbourhood) -> Self {
+        let [sums] = l.exact_lane_sums((kind, Summed::Power), n, near, |_| Some(0));
+        acc + outward(&sums)
     }
 }
 
 impl Lifted<Outward> {
-    /// Σ lo and Σ hi, each exact, of the potential of instance `n` (of `kind`) at the pairs
-    /// `near` holds, sixteen pairs at a time in `Lanes`, in `C` classes: `class` puts a pair in one
-    /// or leaves it out. Listed in parts on the threads in whatever order is fastest: exact sums
-    /// do not depend on it.
+    /// Σ lo and Σ hi, each exact, of the potential (or the power, `Summed`) of instance `n` (of
+    /// `kind`) at the pairs `near` holds, sixteen pairs at a time in `Lanes`, in `C` classes:
+    /// `class` puts a pair in one or leaves it out. Listed in parts on the threads in whatever
+    /// order is fastest: exact sums do not depend on it.
     pub(super) fn exact_lane_sums<const C: usize>(
         &self,
-        kind: Kind,
+        (kind, summed): (Kind, Summed),
         n: usize,
         near: &Neighbourhood,
         class: impl Fn(&Near) -> Option<usize> + Sync,
@@ -116,14 +138,23 @@ impl Lifted<Outward> {
         let pieces = (4 * self.threads).min(parts.max(1));
         let sums = in_order(pieces, self.threads, |k| {
             let mut sums: [(ExactSum, ExactSum); C] = std::array::from_fn(|_| Default::default());
-            let reads = kind.reads();
+            // a power reads the velocities (`reads` says what the potential reads)
+            let reads = match summed {
+                Summed::Potential => kind.reads(),
+                Summed::Power => Reads { v: true, ..kind.reads() },
+            };
             let mut sites = [Site::filled(Outward::NAN), Site::filled(Outward::NAN)];
             // the pairs kept, put into the lanes as they come, evaluated sixteen at a time; the
             // lanes past a short last group hold the group before's sites (or NaN) and are
             // dropped by the zip
             let (mut classes, mut held) = ([0; WIDTH], 0);
             let mut evaluate = |classes: &[usize], sites: &[Site<Lanes>; 2]| {
-                for (e, c) in kind.potential(&wide, &[&sites[0], &sites[1]]).lanes().iter().zip(classes) {
+                let pair = [&sites[0], &sites[1]];
+                let each = match summed {
+                    Summed::Potential => kind.potential(&wide, &pair),
+                    Summed::Power => kind.power(&wide, &pair).unwrap_or_else(|| wide[0].lift(0.0)),
+                };
+                for (e, c) in each.lanes().iter().zip(classes) {
                     let (a, b) = e.bounds();
                     sums[*c].0.add(a);
                     sums[*c].1.add(b);
@@ -343,6 +374,49 @@ mod tests {
                 assert_eq!(bits(got), bits(want), "{n} bodies, {} pairs, {threads} threads", pairs.len());
                 assert!(got.bounds().0 >= one_by_one.bounds().0 && got.bounds().1 <= one_by_one.bounds().1);
             }
+        }
+    }
+
+    /// The power a viscous fluid dissipates, sixteen pairs at a time: the bits of each pair's
+    /// own enclosure added exactly and rounded once, on one thread and on three, holding the
+    /// 256-bit value; pairs approaching and moving apart are both in every group of sixteen.
+    #[test]
+    fn powers_in_lanes_add_up_to_the_exact_sum_of_each_alone() {
+        let (liquid, x, _) = liquid();
+        // velocities of their own (the liquid's repeat its positions' jitter: every pair closes)
+        let v: Vec<[f64; 3]> =
+            (0..x.len()).map(|k| [7 * k % 13, 11 * k % 17, 5 * k % 19].map(|c| c as f64 / 9.0 - 0.9)).collect();
+        let fluid = TermInstance { kind: Kind::Sph, sites: vec![], params: vec![0.6, 0.5, 3.0, 7.0, 0.5, 1.0] };
+        for n in [5, 97, 2197] {
+            let m = Model { bodies: liquid.bodies[..n].to_vec(), terms: vec![fluid.clone()], ..liquid.clone() };
+            let s = Snapshot { step: 0, t: 0.0, x: &x[..n], v: &v[..n], chain: &[], spin: &[] };
+            let q = Lifted::new(&m, &s, &Outward::NAN);
+            let pairs = crate::broad_phase::within(&x[..n], &m.cell, asked_reach(&fluid));
+            let (mut lo, mut hi, mut approaching) = (ExactSum::default(), ExactSum::default(), 0);
+            for (a, b) in pairs.iter().map(|p| q.sites_of(p)) {
+                let e = Kind::Sph.power(&q.params[0], &[a, &b]).unwrap();
+                (lo.add(e.bounds().0), hi.add(e.bounds().1));
+                approaching += usize::from(e.bounds().0 > 0.0);
+            }
+            assert!(
+                n < 97 || (approaching > pairs.len() / 4 && approaching < 3 * pairs.len() / 4),
+                "{approaching} of {}",
+                pairs.len()
+            );
+            let want = Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up));
+            let bits = |e: Outward| (e.bounds().0.to_bits(), e.bounds().1.to_bits());
+            for threads in [1, 3] {
+                let got = Lifted::new(&m, &s, &Outward::NAN).on_threads(threads).dissipated_power(&m);
+                assert_eq!(
+                    bits(got),
+                    bits(Outward::point(0.0) + want),
+                    "{n} bodies, {} pairs, {threads} threads",
+                    pairs.len()
+                );
+            }
+            let exact = Lifted::new(&m, &s, &Float::new(256)).dissipated_power(&m);
+            let (lo, hi) = want.bounds();
+            assert!(Float::with_val(256, lo) <= exact && exact <= Float::with_val(256, hi), "{want:?} against {exact}");
         }
     }
 

@@ -24,7 +24,7 @@
 //! bits, as the gather's are), and that a rank's part is of the bodies it sent to the gather.
 //! A part that fails a check is refused, and rank 0 evaluates the whole state instead.
 
-use super::pair_sums::{asked_reach, sum_exactly};
+use super::pair_sums::{asked_reach, sum_exactly, Summed};
 use super::Lifted;
 use crate::broad_phase::Neighbourhood;
 use crate::enclosure::Enclosure;
@@ -361,8 +361,9 @@ impl Lifted<Outward> {
     /// `PairSum::add_potentials` sums, sixteen pairs at a time and exactly, in two sums.
     fn pairs_part(&self, kind: Kind, n: usize, near: &Neighbourhood, owned: usize) -> Outward {
         // [halves, wholes]: a pair counts by how many of its bodies are owned, none not at all
-        let [halves, wholes] = self
-            .exact_lane_sums(kind, n, near, |q| (usize::from(q.i < owned) + usize::from(q.j < owned)).checked_sub(1));
+        let [halves, wholes] = self.exact_lane_sums((kind, Summed::Potential), n, near, |q| {
+            (usize::from(q.i < owned) + usize::from(q.j < owned)).checked_sub(1)
+        });
         let sum = |(lo, hi): (ExactSum, ExactSum)| Outward::from_bounds(lo.total(Round::Down), hi.total(Round::Up));
         sum(wholes) + sum(halves) * Outward::point(0.5)
     }
