@@ -386,9 +386,11 @@ impl Fluid {
                     let closing = -((s.v[i][0] - s.v[j][0]) * d[0]
                         + (s.v[i][1] - s.v[j][1]) * d[1]
                         + (s.v[i][2] - s.v[j][2]) * d[2]);
-                    if closing < 0.0 {
-                        along += k1 * closing - k2 * closing * closing;
-                    }
+                    // a pair moving apart adds k₁·(−0) − k₂·0 = −0 (k₁, k₂ ≥ 0 and finite), which
+                    // leaves any sum as it was: the bits of a branch, without the branch that
+                    // half the pairs would send the wrong way
+                    let closing = if closing < 0.0 { closing } else { -0.0 };
+                    along += k1 * closing - k2 * closing * closing;
                 }
                 along
             };
