@@ -55,6 +55,12 @@ pub fn diagnostic(e: Error<Rule>, source: &str) -> Diagnostic {
         }
     };
     let message = match &e.variant {
+        ErrorVariant::ParsingError { positives, .. } if positives[..] == [Rule::ident] => {
+            if let Some(d) = named_in_vector(source, at) {
+                return d;
+            }
+            format!("expected a name, found {found}")
+        }
         ErrorVariant::ParsingError { positives, .. } if !positives.is_empty() => {
             let mut names: Vec<&str> = positives.iter().map(describe).collect();
             names.dedup();
@@ -68,4 +74,26 @@ pub fn diagnostic(e: Error<Rule>, source: &str) -> Diagnostic {
         _ => format!("unexpected {found}"),
     };
     Diagnostic::new(Span { start: at, end: at }, message)
+}
+
+/// `[nan, 0, 0]` or `[x0, 1, 2]`: a list that opens with a name is read as flags, and pest
+/// fails at the first number, saying a name was expected there. The mistake is the name, in what
+/// was meant as a vector: said at the name, where the list at `at` holds a number there (a list
+/// of flags that opens with `true` or `false` keeps pest's word).
+fn named_in_vector(source: &str, at: usize) -> Option<Diagnostic> {
+    let number = |s: &str| s.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.');
+    let open = source[..at].rfind('[').filter(|&o| !source[o..at].contains([']', '\n']))?;
+    let first = source[open + 1..at].split(',').next()?;
+    let name = first.trim();
+    let flag = matches!(name, "true" | "false");
+    if flag || !number(&source[at..]) || name.is_empty() || !name.chars().all(|c| c.is_alphanumeric() || c == '_') {
+        return None;
+    }
+    let start = open + 1 + (first.len() - first.trim_start().len());
+    let hint = match name.to_ascii_lowercase().as_str() {
+        "nan" | "inf" | "infinity" => ": a value must be finite",
+        _ => "",
+    };
+    let message = format!("expected a number, found `{name}` (a vector holds numbers only{hint})");
+    Some(Diagnostic::new(Span { start, end: start + name.len() }, message))
 }

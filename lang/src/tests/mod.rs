@@ -40,6 +40,20 @@ fn the_good_scene_compiles() {
 #[test]
 fn syntax_error_says_what_was_expected() {
     assert_eq!(error("mass: 1 }", "mass 1 }"), at(2, 33, "expected a field `name: value`, found `mass`"));
+    // a vector that opens with a name: said at the name, not at the number after it
+    assert_eq!(
+        error("[1, 0, 0]", "[nan, 0, 0]"),
+        at(3, 23, "expected a number, found `nan` (a vector holds numbers only: a value must be finite)")
+    );
+    assert_eq!(
+        error("[1, 0, 0]", "[ x1 ,0, 0]"),
+        at(3, 24, "expected a number, found `x1` (a vector holds numbers only)")
+    );
+    assert_eq!(
+        error("[1, 0, 0]", "[a, b, 0]"),
+        at(3, 23, "expected a number, found `a` (a vector holds numbers only)")
+    );
+    assert_eq!(error("[1, 0, 0]", "[true, 0]"), at(3, 29, "expected a name, found `0`"));
     assert_eq!(error("steps: 10 }\n}", "steps: 10 }\n"), at(6, 1, "expected `@expect`, `@predict`, `uses`, `description`, `units`, `entity`, `bond`, `constraint`, `joint`, `interaction`, `thermostat`, `solver`, `box`, `lattice` or a name, found end of file"));
 }
 
