@@ -312,3 +312,21 @@ fn a_nose_hoover_chain_holds_a_liquid_at_its_temperature() {
     assert!((sum / n / 0.9 - 1.0).abs() < 0.03, "⟨T⟩ = {}", sum / n);
     assert!(worst < 1e-3, "H′ moved by {worst:e}");
 }
+
+/// The implicit kick's rounds stop where a round moves no velocity by more than 4 ulps of the
+/// largest speed: a wander in the last bits settles, a real move does not, and bodies at rest
+/// have settled.
+#[test]
+fn a_round_that_moves_by_rounding_alone_has_settled() {
+    let v = vec![[1.5, -0.25, 0.0], [1e-9, 3.0, -2.0]];
+    let nudged = |by: f64| {
+        let mut w = v.clone();
+        w[1][0] += by * f64::EPSILON * 3.0;
+        w
+    };
+    assert!(super::settled(&v, &v));
+    assert!(super::settled(&nudged(3.5), &v) && super::settled(&v, &nudged(-3.5)));
+    assert!(!super::settled(&nudged(4.5), &v) && !super::settled(&v, &nudged(-4.5)));
+    assert!(super::settled(&[[0.0; 3]; 2], &[[0.0; 3]; 2]));
+    assert!(!super::settled(&[[0.0; 3]; 2], &[[0.0, 1e-300, 0.0]; 2]));
+}
